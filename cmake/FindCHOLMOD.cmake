@@ -1,0 +1,18 @@
+# Find SuiteSparse CHOLMOD (Debian 12 ships SuiteSparse 5.12 without a CMake config).
+# Defines CHOLMOD::CHOLMOD.
+find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse)
+find_library(CHOLMOD_LIBRARY cholmod)
+find_library(AMD_LIBRARY amd)
+find_library(COLAMD_LIBRARY colamd)
+find_library(CAMD_LIBRARY camd)
+find_library(CCOLAMD_LIBRARY ccolamd)
+find_library(SUITESPARSECONFIG_LIBRARY suitesparseconfig)
+include(FindPackageHandleStandardArgs)
+find_package_handle_standard_args(CHOLMOD DEFAULT_MSG CHOLMOD_LIBRARY CHOLMOD_INCLUDE_DIR
+  AMD_LIBRARY COLAMD_LIBRARY SUITESPARSECONFIG_LIBRARY)
+if(CHOLMOD_FOUND AND NOT TARGET CHOLMOD::CHOLMOD)
+  add_library(CHOLMOD::CHOLMOD INTERFACE IMPORTED)
+  set_target_properties(CHOLMOD::CHOLMOD PROPERTIES
+    INTERFACE_INCLUDE_DIRECTORIES "${CHOLMOD_INCLUDE_DIR}"
+    INTERFACE_LINK_LIBRARIES "${CHOLMOD_LIBRARY};${AMD_LIBRARY};${COLAMD_LIBRARY};${CAMD_LIBRARY};${CCOLAMD_LIBRARY};${SUITESPARSECONFIG_LIBRARY}")
+endif()

@@ -1,0 +1,48 @@
+#include "graph/node.h"
+
+namespace polyhex {
+
+Registry& Registry::instance() {
+  static Registry r;
+  return r;
+}
+
+void Registry::add(NodeSpec spec) {
+  if (spec.type.find('/') == std::string::npos) spec.type += "/default";
+  if (specs_.count(spec.type)) throw Error("node type `" + spec.type + "` registered twice");
+  std::string stage = spec.stage();
+  if (!default_variant_.count(stage)) default_variant_[stage] = spec.type;
+  specs_.emplace(spec.type, std::move(spec));
+}
+
+void Registry::set_default_variant(const std::string& stage, const std::string& variant) {
+  default_variant_[stage] = stage + "/" + variant;
+}
+
+const NodeSpec* Registry::find(const std::string& type) const {
+  auto it = specs_.find(type);
+  if (it != specs_.end()) return &it->second;
+  if (type.find('/') == std::string::npos) {
+    auto d = default_variant_.find(type);
+    if (d != default_variant_.end()) return find(d->second);
+  }
+  return nullptr;
+}
+
+std::vector<std::string> Registry::types() const {
+  std::vector<std::string> out;
+  for (auto& [k, v] : specs_) out.push_back(k);
+  return out;
+}
+
+void Registry::add_saver(const std::string& artefact_type, const std::string& ext, ArtefactSaver saver) {
+  savers_[artefact_type] = {ext, std::move(saver)};
+}
+
+std::pair<std::string, ArtefactSaver> Registry::saver(const std::string& artefact_type) const {
+  auto it = savers_.find(artefact_type);
+  if (it == savers_.end()) return {"", nullptr};
+  return it->second;
+}
+
+}  // namespace polyhex

@@ -1,0 +1,25 @@
+/// @file shapes.h
+/// @brief Built-in closed test surfaces, so the default run and the unit tests need no file.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "nodes/artefacts/meshes.h"
+
+namespace polyhex {
+
+struct ShapeParams {
+  std::string name = "fandisk_like";  ///< one of shape_names()
+  int resolution = 64;                ///< samples along the longest side (level-set voxels or parameter steps)
+};
+
+/// Names accepted by make_shape: sphere, torus, bumpy_torus, rod_with_holes, l_block, bent_pipe,
+/// fandisk_like, box.
+std::vector<std::string> shape_names();
+
+/// A closed, manifold, outward-oriented triangle surface of the named shape.
+/// \throw InvalidInput for an unknown name (the message lists shape_names())
+SurfaceMesh make_shape(const ShapeParams& p);
+
+}  // namespace polyhex
