@@ -1,0 +1,50 @@
+/// @file config.h
+/// @brief Pipeline configs: JSON `{"nodes": [{id, type, params, inputs}]}`, `${var}` substitution and
+/// `--set id.param=value` overrides.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace polyhex {
+
+using json = nlohmann::json;
+
+/// One node as written in a config.
+struct NodeConfig {
+  std::string id;     ///< unique name, [A-Za-z0-9_-]+
+  std::string type;   ///< "stage" or "stage/variant"
+  json params = json::object();
+  /// port name -> id of the producing node. A config may give `inputs` as an object
+  /// {"port": "id"} or as an array of ids in port order (resolved against the node spec).
+  json inputs = json::object();
+};
+
+struct PipelineConfig {
+  std::vector<NodeConfig> nodes;
+  std::string source;  ///< file name or "<string>", for messages
+};
+
+/// Replaces `${name}` and `${name:-default}` in every string of `j` by vars[name] (or the default).
+/// \throw ConfigError naming `source` when a variable has no value and no default.
+json substitute_vars(const json& j, const std::map<std::string, std::string>& vars, const std::string& source);
+
+/// Checks the structure of a config (top-level object with a `nodes` array, each node an object with
+/// string `id` and `type`, optional object `params`, object-or-array `inputs`, no other keys, unique ids).
+/// \throw ConfigError naming the source and the node.
+PipelineConfig parse_config(const json& j, const std::string& source);
+
+/// Reads a JSON config file, then substitutes variables.
+/// \throw ConfigError when the file is missing or not valid JSON (with the parser's position).
+json load_config_json(const std::filesystem::path& path, const std::map<std::string, std::string>& vars);
+
+/// Applies `id.param=value` to the config JSON. The value is parsed as JSON when it parses
+/// (numbers, true/false, quoted strings), else taken as a plain string.
+/// \throw ConfigError when the syntax is wrong or no node has that id (lists the ids).
+void apply_override(json& config, const std::string& assignment);
+
+}  // namespace polyhex

@@ -1,0 +1,246 @@
+#include "graph/pipeline.h"
+
+#include <oneapi/tbb/flow_graph.h>
+#include <oneapi/tbb/global_control.h>
+#include <oneapi/tbb/task_arena.h>
+
+#include <atomic>
+#include <chrono>
+#include <map>
+#include <mutex>
+#include <sstream>
+
+#include "runtime/atomic_file.h"
+
+namespace polyhex {
+
+namespace {
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+std::string port_list(const NodeSpec& spec) {
+  std::vector<std::string> names;
+  for (auto& p : spec.inputs) names.push_back(p.name + " (" + p.artefact_type + (p.optional ? ", optional)" : ")"));
+  return names.empty() ? "(none)" : join(names);
+}
+
+}  // namespace
+
+Pipeline Pipeline::build(const PipelineConfig& cfg) {
+  Pipeline p;
+  p.source_ = cfg.source;
+  const Registry& reg = Registry::instance();
+  std::map<std::string, int> index;
+  for (size_t i = 0; i < cfg.nodes.size(); ++i) index[cfg.nodes[i].id] = int(i);
+
+  for (const NodeConfig& nc : cfg.nodes) {
+    const std::string where = cfg.source + ": node `" + nc.id + "` (`" + nc.type + "`)";
+    const NodeSpec* spec = reg.find(nc.type);
+    if (!spec) throw ConfigError(where + ": unknown node type `" + nc.type + "`; registered types: " + join(reg.types()));
+    ResolvedNode rn;
+    rn.id = nc.id;
+    rn.spec = spec;
+    rn.params = spec->check_params(nc.params, cfg.source + ": node `" + nc.id + "` (`" + spec->type + "`)");
+    rn.input_nodes.assign(spec->inputs.size(), -1);
+    auto bind = [&](size_t port, const std::string& from) {
+      auto it = index.find(from);
+      if (it == index.end()) throw ConfigError(where + ": input `" + spec->inputs[port].name + "` names unknown node `" + from + "`");
+      rn.input_nodes[port] = it->second;
+    };
+    if (nc.inputs.is_array()) {
+      if (nc.inputs.size() > spec->inputs.size())
+        throw ConfigError(where + ": " + std::to_string(nc.inputs.size()) + " inputs given, ports: " + port_list(*spec));
+      for (size_t k = 0; k < nc.inputs.size(); ++k) bind(k, nc.inputs[k].get<std::string>());
+    } else {
+      for (auto it = nc.inputs.begin(); it != nc.inputs.end(); ++it) {
+        size_t port = spec->inputs.size();
+        for (size_t k = 0; k < spec->inputs.size(); ++k)
+          if (spec->inputs[k].name == it.key()) port = k;
+        if (port == spec->inputs.size())
+          throw ConfigError(where + ": unknown input port `" + it.key() + "`; ports: " + port_list(*spec));
+        bind(port, it.value().get<std::string>());
+      }
+    }
+    for (size_t k = 0; k < spec->inputs.size(); ++k) {
+      const PortSpec& port = spec->inputs[k];
+      if (rn.input_nodes[k] < 0) {
+        if (!port.optional) throw ConfigError(where + ": required input `" + port.name + "` (" + port.artefact_type + ") is not connected");
+        continue;
+      }
+      const NodeConfig& from = cfg.nodes[rn.input_nodes[k]];
+      const NodeSpec* fs = reg.find(from.type);
+      if (!fs) continue;  // reported when that node is resolved
+      if (fs->output != port.artefact_type)
+        throw ConfigError(where + ": input `" + port.name + "` expects " + port.artefact_type + " but node `" + from.id +
+                          "` (`" + fs->type + "`) produces " + (fs->output.empty() ? std::string("nothing") : fs->output));
+    }
+    p.nodes_.push_back(std::move(rn));
+  }
+  // Cycle check: depth-first search with colours.
+  std::vector<int> colour(p.nodes_.size(), 0);
+  std::vector<int> stack;
+  std::function<void(int)> visit = [&](int v) {
+    colour[v] = 1;
+    stack.push_back(v);
+    for (int u : p.nodes_[v].input_nodes) {
+      if (u < 0) continue;
+      if (colour[u] == 1) {
+        std::string cyc;
+        auto it = std::find(stack.begin(), stack.end(), u);
+        for (; it != stack.end(); ++it) cyc += "`" + p.nodes_[*it].id + "` <- ";
+        throw ConfigError(cfg.source + ": node `" + p.nodes_[u].id + "`: the inputs form a cycle: " + cyc + "`" + p.nodes_[u].id + "`");
+      }
+      if (colour[u] == 0) visit(u);
+    }
+    stack.pop_back();
+    colour[v] = 2;
+  };
+  for (size_t v = 0; v < p.nodes_.size(); ++v)
+    if (colour[v] == 0) visit(int(v));
+  return p;
+}
+
+std::string Pipeline::dot() const {
+  std::ostringstream s;
+  s << "digraph polyhex {\n  rankdir=LR;\n  node [shape=box, fontname=\"Helvetica\"];\n";
+  for (const ResolvedNode& n : nodes_) {
+    std::string label = n.id + "\\n" + n.spec->type;
+    for (auto it = n.params.begin(); it != n.params.end(); ++it) {
+      std::string v = it.value().dump();
+      for (auto& c : v)
+        if (c == '"') c = '\'';
+      label += "\\n" + it.key() + "=" + v;
+    }
+    s << "  \"" << n.id << "\" [label=\"" << label << "\"];\n";
+  }
+  for (const ResolvedNode& n : nodes_)
+    for (size_t k = 0; k < n.input_nodes.size(); ++k)
+      if (n.input_nodes[k] >= 0)
+        s << "  \"" << nodes_[n.input_nodes[k]].id << "\" -> \"" << n.id << "\" [label=\"" << n.spec->inputs[k].name
+          << ": " << n.spec->inputs[k].artefact_type << "\"];\n";
+  s << "}\n";
+  return s.str();
+}
+
+RunResult Pipeline::run(const RunOptions& opt) const {
+  namespace flow = oneapi::tbb::flow;
+  std::error_code ec;
+  std::filesystem::create_directories(opt.out_dir, ec);
+  if (ec || !std::filesystem::is_directory(opt.out_dir))
+    throw IOError(opt.out_dir.string() + ": cannot create output folder" + (ec ? ": " + ec.message() : ""));
+
+  RunResult result;
+  result.nodes.resize(nodes_.size());
+  std::vector<Artefact> outputs(nodes_.size());
+  std::mutex event_mutex;
+  auto event = [&](const std::string& e, const ResolvedNode& n, double v, const std::string& what) {
+    if (!opt.on_event) return;
+    std::lock_guard<std::mutex> lock(event_mutex);
+    opt.on_event(e, n.id, n.spec->type, v, what);
+  };
+
+  auto body = [&](size_t i) {
+    const ResolvedNode& n = nodes_[i];
+    NodeRecord& rec = result.nodes[i];
+    NodeContext ctx;
+    ctx.id = n.id;
+    ctx.type = n.spec->type;
+    ctx.out_dir = opt.out_dir;
+    ctx.save_all = opt.save_all;
+    ctx.on_progress = [&](double f, const std::string& what) { event("progress", n, f, what); };
+    Inputs in;
+    for (int u : n.input_nodes) in.items.push_back(u >= 0 ? outputs[u] : Artefact{});
+    event("start", n, 0, "");
+    auto t0 = std::chrono::steady_clock::now();
+    try {
+      Artefact out = n.spec->run(n.params, in, ctx);
+      if (!n.spec->output.empty() && (!out || out.type != n.spec->output))
+        throw Error("produced " + (out ? out.type : std::string("nothing")) + " instead of " + n.spec->output);
+      outputs[i] = out;
+      if (opt.save_all && out) {
+        auto [ext, saver] = Registry::instance().saver(out.type);
+        if (saver) saver(out, opt.out_dir / (n.id + ext));
+      }
+    } catch (const NodeError&) {
+      throw;
+    } catch (const std::exception& e) {
+      rec.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      rec.metrics = ctx.metrics;
+      rec.warnings = ctx.warnings;
+      throw NodeError(n.id, n.spec->type, e.what());
+    } catch (...) {
+      throw NodeError(n.id, n.spec->type, "unknown exception");
+    }
+    rec.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    rec.ran = true;
+    rec.metrics = std::move(ctx.metrics);
+    rec.warnings = std::move(ctx.warnings);
+    event("done", n, rec.seconds, "");
+  };
+
+  for (size_t i = 0; i < nodes_.size(); ++i) {
+    result.nodes[i].id = nodes_[i].id;
+    result.nodes[i].type = nodes_[i].spec->type;
+  }
+
+  int threads = opt.threads > 0 ? opt.threads : oneapi::tbb::info::default_concurrency();
+  oneapi::tbb::global_control limit(oneapi::tbb::global_control::max_allowed_parallelism, size_t(threads));
+  auto t0 = std::chrono::steady_clock::now();
+  oneapi::tbb::task_arena arena(threads);
+  arena.execute([&] {
+    flow::graph g;
+    flow::broadcast_node<flow::continue_msg> start(g);
+    std::vector<std::unique_ptr<flow::continue_node<flow::continue_msg>>> fnodes;
+    for (size_t i = 0; i < nodes_.size(); ++i)
+      fnodes.push_back(std::make_unique<flow::continue_node<flow::continue_msg>>(
+          g, [&, i](const flow::continue_msg&) { body(i); }));
+    for (size_t i = 0; i < nodes_.size(); ++i) {
+      bool has_pred = false;
+      for (int u : nodes_[i].input_nodes)
+        if (u >= 0) {
+          flow::make_edge(*fnodes[u], *fnodes[i]);
+          has_pred = true;
+        }
+      if (!has_pred) flow::make_edge(start, *fnodes[i]);
+    }
+    try {
+      start.try_put(flow::continue_msg());
+      g.wait_for_all();
+    } catch (const std::exception& e) {
+      result.error = e.what();
+    }
+  });
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return result;
+}
+
+json RunResult::report() const {
+  json r;
+  r["polyhex_version"] = POLYHEX_VERSION;
+  r["status"] = error.empty() ? "ok" : "error";
+  if (!error.empty()) r["error"] = error;
+  r["seconds"] = seconds;
+  json nodes_json = json::object();
+  for (const NodeRecord& n : nodes) {
+    json j;
+    j["type"] = n.type;
+    j["ran"] = n.ran;
+    j["seconds"] = n.seconds;
+    j["cache_hit"] = n.cache_hit;
+    j["metrics"] = n.metrics;
+    j["warnings"] = n.warnings;
+    nodes_json[n.id] = j;
+  }
+  r["nodes"] = nodes_json;
+  return r;
+}
+
+void write_report(const RunResult& r, const std::filesystem::path& dir) {
+  write_file_atomic(dir / "report.json", [&](std::ostream& out) { out << r.report().dump(2) << "\n"; });
+}
+
+}  // namespace polyhex

@@ -1,0 +1,76 @@
+/// @file pipeline.h
+/// @brief A validated pipeline (config resolved against the node registry) and its execution as a
+/// `tbb::flow::graph`.
+///
+/// Building checks everything before anything runs: unknown node types (listing the registered ones),
+/// params (unknown keys, types, ranges), inputs (unknown ports, unknown ids, missing required ports),
+/// artefact types of every edge, and cycles. Running builds one `continue_node` per node, wired along the
+/// inputs, so independent nodes run concurrently. An exception in a node cancels the graph and comes
+/// back as a NodeError naming the node id and type.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "graph/config.h"
+#include "graph/node.h"
+
+namespace polyhex {
+
+struct ResolvedNode {
+  std::string id;
+  const NodeSpec* spec = nullptr;
+  json params;                  ///< canonical params (every key, defaults filled)
+  std::vector<int> input_nodes; ///< per port of spec->inputs, index of the producing node or -1
+};
+
+/// What happened to one node in a run.
+struct NodeRecord {
+  std::string id, type;
+  double seconds = 0;
+  bool cache_hit = false;
+  bool ran = false;
+  json metrics = json::object();
+  std::vector<std::string> warnings;
+};
+
+struct RunOptions {
+  std::filesystem::path out_dir = "polyhex-out";
+  bool save_all = false;   ///< also write every mesh artefact as OUT/<id>.<ext>
+  int threads = 0;         ///< 0 = all cores
+  /// Called on node start ("start"), end ("done") and progress ("progress"); may be empty.
+  std::function<void(const std::string& event, const std::string& id, const std::string& type, double value,
+                     const std::string& what)>
+      on_event;
+};
+
+struct RunResult {
+  std::vector<NodeRecord> nodes;  ///< in config order
+  double seconds = 0;
+  std::string error;              ///< empty when the run succeeded
+  /// report.json: {polyhex_version, status, error?, seconds, nodes: {id: {type, seconds, cache_hit, metrics, warnings}}}
+  json report() const;
+};
+
+class Pipeline {
+ public:
+  /// \throw ConfigError naming the node and listing valid choices
+  static Pipeline build(const PipelineConfig& cfg);
+  const std::vector<ResolvedNode>& nodes() const { return nodes_; }
+  /// Graphviz DOT of the pipeline: nodes with their type and params, edges labelled with artefact types.
+  std::string dot() const;
+  /// Runs the graph. Never throws for node failures: they are in RunResult::error (and the report).
+  /// \throw IOError when the output folder cannot be created
+  RunResult run(const RunOptions& opt) const;
+
+ private:
+  std::vector<ResolvedNode> nodes_;
+  std::string source_;
+};
+
+/// Writes `report.json` into `dir` atomically.
+void write_report(const RunResult& r, const std::filesystem::path& dir);
+
+}  // namespace polyhex
