@@ -6,6 +6,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>  // cross products everywhere meshes are used
 #include <string>
 #include <vector>
 
