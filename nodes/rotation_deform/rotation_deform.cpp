@@ -1,0 +1,518 @@
+#include "nodes/rotation_deform/rotation_deform.h"
+
+#include <Eigen/Geometry>
+#include <Eigen/SparseCore>
+#include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "runtime/errors.h"
+
+namespace polyhex {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// Faces of a positive tet (v0..v3) listed so that their normals point out of the tet.
+constexpr int kOutwardFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
+
+template <class F>
+void parallel_range(int n, F&& body) {
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 512), [&](const tbb::blocked_range<int>& r) {
+    for (int i = r.begin(); i < r.end(); ++i) body(i);
+  });
+}
+
+/// Compressed rows: row r is items[offsets[r] .. offsets[r+1]).
+struct Csr {
+  std::vector<int> offsets, items;
+  int size(int r) const { return offsets[r + 1] - offsets[r]; }
+  const int* begin(int r) const { return items.data() + offsets[r]; }
+  const int* end(int r) const { return items.data() + offsets[r + 1]; }
+};
+
+/// Builds a Csr from (row, item) pairs given by `for_each(emit)`, rows in [0, rows).
+template <class ForEach>
+Csr build_csr(int rows, ForEach&& for_each) {
+  Csr c;
+  c.offsets.assign(rows + 1, 0);
+  for_each([&](int r, int) { ++c.offsets[r + 1]; });
+  std::partial_sum(c.offsets.begin(), c.offsets.end(), c.offsets.begin());
+  c.items.resize(c.offsets.back());
+  std::vector<int> fill(c.offsets.begin(), c.offsets.end() - 1);
+  for_each([&](int r, int item) { c.items[fill[r]++] = item; });
+  return c;
+}
+
+/// Everything that depends on connectivity only: computed once per run.
+struct Topology {
+  int nV = 0;
+  Csr vertex_tets;           // vertex -> incident tets
+  Csr neighbours;            // vertex -> adjacent vertices (tet edges), sorted
+  RowMatrixX3i F;            // boundary faces, outward
+  std::vector<int> bverts;   // boundary vertices, sorted
+  std::vector<int> bindex;   // vertex -> index into bverts, -1 inside
+  Csr bvert_faces;           // boundary vertex index -> incident boundary faces
+  Csr bvert_neighbours;      // boundary vertex index -> boundary vertex indices sharing a boundary edge
+  std::vector<int> pins;     // one pinned vertex per connected component
+  std::vector<char> pinned;  // per vertex
+};
+
+bool tet_has(const RowMatrixX4i& T, int t, int v) {
+  return T(t, 0) == v || T(t, 1) == v || T(t, 2) == v || T(t, 3) == v;
+}
+
+Csr vertex_tet_csr(const RowMatrixX4i& T, int nV) {
+  return build_csr(nV, [&](auto emit) {
+    for (int t = 0; t < T.rows(); ++t)
+      for (int k = 0; k < 4; ++k) emit(T(t, k), t);
+  });
+}
+
+RowMatrixX3i boundary_faces_from(const RowMatrixX4i& T, const Csr& vt) {
+  const int nT = static_cast<int>(T.rows());
+  std::vector<char> is_boundary(4 * static_cast<size_t>(nT), 0);
+  parallel_range(nT, [&](int t) {
+    for (int f = 0; f < 4; ++f) {
+      const int a = T(t, kOutwardFaces[f][0]), b = T(t, kOutwardFaces[f][1]), c = T(t, kOutwardFaces[f][2]);
+      // Search the tets around the vertex with the fewest tets.
+      int s = a;
+      if (vt.size(b) < vt.size(s)) s = b;
+      if (vt.size(c) < vt.size(s)) s = c;
+      bool shared = false;
+      for (const int* o = vt.begin(s); o != vt.end(s) && !shared; ++o)
+        shared = *o != t && tet_has(T, *o, a) && tet_has(T, *o, b) && tet_has(T, *o, c);
+      is_boundary[4 * size_t(t) + f] = !shared;
+    }
+  });
+  const long count = std::count(is_boundary.begin(), is_boundary.end(), 1);
+  RowMatrixX3i F(count, 3);
+  long row = 0;
+  for (int t = 0; t < nT; ++t)
+    for (int f = 0; f < 4; ++f)
+      if (is_boundary[4 * size_t(t) + f]) {
+        for (int k = 0; k < 3; ++k) F(row, k) = T(t, kOutwardFaces[f][k]);
+        ++row;
+      }
+  return F;
+}
+
+/// Sorted unique neighbours of vertex v (tet edges) into buf.
+void gather_neighbours(const RowMatrixX4i& T, const Csr& vt, int v, std::vector<int>& buf) {
+  buf.clear();
+  for (const int* t = vt.begin(v); t != vt.end(v); ++t)
+    for (int k = 0; k < 4; ++k)
+      if (T(*t, k) != v) buf.push_back(T(*t, k));
+  std::sort(buf.begin(), buf.end());
+  buf.erase(std::unique(buf.begin(), buf.end()), buf.end());
+}
+
+Csr neighbour_csr(const RowMatrixX4i& T, const Csr& vt, int nV) {
+  Csr c;
+  c.offsets.assign(nV + 1, 0);
+  tbb::combinable<std::vector<int>> bufs;
+  parallel_range(nV, [&](int v) {
+    auto& buf = bufs.local();
+    gather_neighbours(T, vt, v, buf);
+    c.offsets[v + 1] = static_cast<int>(buf.size());
+  });
+  std::partial_sum(c.offsets.begin(), c.offsets.end(), c.offsets.begin());
+  c.items.resize(c.offsets.back());
+  parallel_range(nV, [&](int v) {
+    auto& buf = bufs.local();
+    gather_neighbours(T, vt, v, buf);
+    std::copy(buf.begin(), buf.end(), c.items.begin() + c.offsets[v]);
+  });
+  return c;
+}
+
+int find_root(std::vector<int>& parent, int v) {
+  while (parent[v] != v) v = parent[v] = parent[parent[v]];
+  return v;
+}
+
+/// One pin per connected component: the vertex nearest to the component's vertex centroid.
+std::vector<int> component_pins(const RowMatrixX3d& V, const RowMatrixX4i& T) {
+  const int nV = static_cast<int>(V.rows());
+  std::vector<int> parent(nV);
+  std::iota(parent.begin(), parent.end(), 0);
+  for (int t = 0; t < T.rows(); ++t)
+    for (int k = 1; k < 4; ++k) {
+      int a = find_root(parent, T(t, 0)), b = find_root(parent, T(t, k));
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+    }
+  std::vector<int> comp(nV), roots;
+  for (int v = 0; v < nV; ++v) {
+    comp[v] = find_root(parent, v);
+    if (comp[v] == v) roots.push_back(v);
+  }
+  std::vector<int> slot(nV, -1);
+  for (size_t r = 0; r < roots.size(); ++r) slot[roots[r]] = static_cast<int>(r);
+  std::vector<Eigen::Vector3d> centroid(roots.size(), Eigen::Vector3d::Zero());
+  std::vector<int> count(roots.size(), 0);
+  for (int v = 0; v < nV; ++v) {
+    centroid[slot[comp[v]]] += V.row(v).transpose();
+    ++count[slot[comp[v]]];
+  }
+  std::vector<int> pins(roots.size(), -1);
+  std::vector<double> best(roots.size(), std::numeric_limits<double>::infinity());
+  for (int v = 0; v < nV; ++v) {
+    const int s = slot[comp[v]];
+    const double d = (V.row(v).transpose() - centroid[s] / count[s]).squaredNorm();
+    if (d < best[s]) best[s] = d, pins[s] = v;
+  }
+  return pins;
+}
+
+Topology build_topology(const TetMesh& m) {
+  Topology top;
+  top.nV = static_cast<int>(m.V.rows());
+  top.vertex_tets = vertex_tet_csr(m.T, top.nV);
+  for (int v = 0; v < top.nV; ++v)
+    if (top.vertex_tets.size(v) == 0)
+      throw InvalidInput(m.source + ": vertex " + std::to_string(v) + " is used by no tet");
+  top.neighbours = neighbour_csr(m.T, top.vertex_tets, top.nV);
+  top.F = boundary_faces_from(m.T, top.vertex_tets);
+  top.bindex.assign(top.nV, -1);
+  for (int f = 0; f < top.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) top.bindex[top.F(f, k)] = 0;
+  for (int v = 0; v < top.nV; ++v)
+    if (top.bindex[v] == 0) {
+      top.bindex[v] = static_cast<int>(top.bverts.size());
+      top.bverts.push_back(v);
+    }
+  const int nB = static_cast<int>(top.bverts.size());
+  top.bvert_faces = build_csr(nB, [&](auto emit) {
+    for (int f = 0; f < top.F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) emit(top.bindex[top.F(f, k)], f);
+  });
+  // Each boundary edge appears in two faces (once per direction): emit a -> b per directed edge.
+  top.bvert_neighbours = build_csr(nB, [&](auto emit) {
+    for (int f = 0; f < top.F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) emit(top.bindex[top.F(f, k)], top.bindex[top.F(f, (k + 1) % 3)]);
+  });
+  top.pins = component_pins(m.V, m.T);
+  top.pinned.assign(top.nV, 0);
+  for (int p : top.pins) top.pinned[p] = 1;
+  return top;
+}
+
+/// Lower triangle (CSC) of the graph Laplacian with diag(v) = degree(v) + extra[v]. Entries in a
+/// row or column of a `pinned` vertex become explicit zeros and its diagonal 1 (Dirichlet row).
+Eigen::SparseMatrix<double> laplacian_lower(const Topology& top, const std::vector<double>& extra,
+                                            const std::vector<char>& pinned) {
+  const int n = top.nV;
+  Eigen::SparseMatrix<double> A(n, n);
+  std::vector<int> upper_start(n);
+  long nnz = 0;
+  for (int j = 0; j < n; ++j) {
+    upper_start[j] = static_cast<int>(std::upper_bound(top.neighbours.begin(j), top.neighbours.end(j), j) -
+                                      top.neighbours.begin(j));
+    nnz += 1 + top.neighbours.size(j) - upper_start[j];
+  }
+  A.resizeNonZeros(nnz);
+  int* outer = A.outerIndexPtr();
+  int* inner = A.innerIndexPtr();
+  double* val = A.valuePtr();
+  long p = 0;
+  for (int j = 0; j < n; ++j) {
+    outer[j] = static_cast<int>(p);
+    inner[p] = j;
+    val[p++] = pinned[j] ? 1.0 : top.neighbours.size(j) + extra[j];
+    for (const int* i = top.neighbours.begin(j) + upper_start[j]; i != top.neighbours.end(j); ++i) {
+      inner[p] = *i;
+      val[p++] = (pinned[j] || pinned[*i]) ? 0.0 : -1.0;
+    }
+  }
+  outer[n] = static_cast<int>(p);
+  return A;
+}
+
+Eigen::Matrix3d edge_matrix(const RowMatrixX3d& V, const RowMatrixX4i& T, int t) {
+  Eigen::Matrix3d D;
+  for (int k = 0; k < 3; ++k) D.col(k) = (V.row(T(t, k + 1)) - V.row(T(t, 0))).transpose();
+  return D;
+}
+
+struct Reduction {
+  double sum = 0, max = 0, volume = 0;
+  long good = 0, inverted = 0;
+};
+
+/// Inverted tets, conformal distortion (relative to the input, through Dinv0) and volume.
+Reduction tet_figures(const RowMatrixX3d& V, const RowMatrixX4i& T, const std::vector<Eigen::Matrix3d>& Dinv0) {
+  tbb::combinable<Reduction> acc;
+  parallel_range(static_cast<int>(T.rows()), [&](int t) {
+    auto& r = acc.local();
+    const Eigen::Matrix3d D = edge_matrix(V, T, t);
+    const double det = D.determinant();
+    r.volume += det / 6.0;
+    if (!(det > 0)) {
+      ++r.inverted;
+      return;
+    }
+    const Eigen::Matrix3d Fg = D * Dinv0[t];
+    const double kappa = Fg.norm() * Fg.inverse().norm() / 3.0;
+    r.sum += kappa;
+    r.max = std::max(r.max, kappa);
+    ++r.good;
+  });
+  return acc.combine([](Reduction a, const Reduction& b) {
+    a.sum += b.sum;
+    a.max = std::max(a.max, b.max);
+    a.volume += b.volume;
+    a.good += b.good;
+    a.inverted += b.inverted;
+    return a;
+  });
+}
+
+Eigen::Vector3d face_area_vector(const RowMatrixX3d& V, const RowMatrixX3i& F, int f) {
+  const Eigen::Vector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
+  return (b - a).cross(c - a);  // twice the area, along the outward normal
+}
+
+void check_params(const RotationDeformParams& p) {
+  auto range = [](const std::string& name, double v, const std::string& r) {
+    return ConfigError("rotation_deform: param `" + name + "` = " + std::to_string(v) + " is out of range " + r);
+  };
+  if (p.iterations < 1 || p.iterations > 50) throw range("iterations", p.iterations, "[1, 50]");
+  if (!(p.anchor_weight > 0 && p.anchor_weight <= 1e6)) throw range("anchor_weight", p.anchor_weight, "(0, 1e6]");
+  if (!(p.feature_angle >= 0 && p.feature_angle <= 180)) throw range("feature_angle", p.feature_angle, "[0, 180]");
+  if (p.solve_mode != "multi_column" && p.solve_mode != "parallel")
+    throw ConfigError("rotation_deform: param `solve_mode` = \"" + p.solve_mode +
+                      "\" is not one of: multi_column, parallel");
+}
+
+void check_mesh(const TetMesh& m) {
+  const std::string who = m.source.empty() ? std::string("tet mesh") : m.source;
+  if (m.T.rows() == 0 || m.V.rows() < 4)
+    throw InvalidInput(who + ": empty tet mesh (" + std::to_string(m.V.rows()) + " vertices, " +
+                       std::to_string(m.T.rows()) + " tets)");
+  for (int t = 0; t < m.T.rows(); ++t)
+    for (int k = 0; k < 4; ++k)
+      if (m.T(t, k) < 0 || m.T(t, k) >= m.V.rows())
+        throw InvalidInput(who + ": tet " + std::to_string(t) + " has vertex index " + std::to_string(m.T(t, k)) +
+                           " out of range (" + std::to_string(m.V.rows()) + " vertices)");
+  if (!m.V.allFinite()) throw InvalidInput(who + ": non-finite vertex position");
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Building blocks
+
+Eigen::Vector4d coherent_quaternion(const Eigen::Matrix3d& R) {
+  // §4.1: reorder and reflect the columns of R (R P, P a signed permutation with det +1) to
+  // maximise the trace; then q_w = ½ sqrt(1 + trace) > 0 (the 24 candidates always include one
+  // with trace > 1.9), which makes the quaternion coherent with all its neighbours.
+  static const std::array<std::array<int, 3>, 6> perms = {
+      {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {0, 2, 1}, {2, 1, 0}, {1, 0, 2}}};
+  double best = -std::numeric_limits<double>::infinity();
+  Eigen::Matrix3d M = R;
+  for (int pi = 0; pi < 6; ++pi) {
+    const int parity = pi < 3 ? 1 : -1;  // the first three are even permutations
+    for (int s = 0; s < 8; ++s) {
+      const int sx = (s & 1) ? -1 : 1, sy = (s & 2) ? -1 : 1, sz = (s & 4) ? -1 : 1;
+      if (parity * sx * sy * sz != 1) continue;
+      const int sign[3] = {sx, sy, sz};
+      // (R P)_{:,j} = sign_j R_{:,perm_j}
+      double tr = 0;
+      for (int j = 0; j < 3; ++j) tr += sign[j] * R(j, perms[pi][j]);
+      if (tr > best + 1e-15) {
+        best = tr;
+        for (int j = 0; j < 3; ++j) M.col(j) = sign[j] * R.col(perms[pi][j]);
+      }
+    }
+  }
+  const double w = 0.5 * std::sqrt(std::max(0.0, 1.0 + M.trace()));
+  Eigen::Vector4d q((M(2, 1) - M(1, 2)) / (4 * w), (M(0, 2) - M(2, 0)) / (4 * w), (M(1, 0) - M(0, 1)) / (4 * w), w);
+  return q.normalized();
+}
+
+Eigen::Matrix3d axis_aligning_rotation(const Eigen::Vector3d& n) {
+  int k = 0;
+  n.cwiseAbs().maxCoeff(&k);
+  Eigen::Vector3d a = Eigen::Vector3d::Zero();
+  a[k] = n[k] >= 0 ? 1.0 : -1.0;
+  // Rodrigues for the rotation about n x a by the angle between them; c = n.a >= 1/sqrt(3).
+  const Eigen::Vector3d v = n.cross(a);
+  const double c = n.dot(a);
+  Eigen::Matrix3d K;
+  K << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return Eigen::Matrix3d::Identity() + K + K * K / (1.0 + c);
+}
+
+RowMatrixX3i boundary_faces(const RowMatrixX4i& T, int nV) { return boundary_faces_from(T, vertex_tet_csr(T, nV)); }
+
+double axis_alignment(const RowMatrixX3d& V, const RowMatrixX3i& F, double angle_deg) {
+  const double c = std::cos(angle_deg * kPi / 180.0);
+  tbb::combinable<std::pair<double, double>> acc;  // (aligned area, total area)
+  parallel_range(static_cast<int>(F.rows()), [&](int f) {
+    const Eigen::Vector3d n = face_area_vector(V, F, f);
+    const double a = n.norm();
+    auto& s = acc.local();
+    s.second += a;
+    if (a > 0 && n.cwiseAbs().maxCoeff() >= c * a) s.first += a;
+  });
+  auto s = acc.combine([](auto x, const auto& y) { return std::make_pair(x.first + y.first, x.second + y.second); });
+  return s.second > 0 ? s.first / s.second : 0.0;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformParams& params,
+                                     const IterationCallback& on_iteration) {
+  check_params(params);
+  check_mesh(input);
+  const SolveMode mode = parse_solve_mode(params.solve_mode);
+  RotationDeformResult res;
+  auto t_assemble = Clock::now();
+
+  // --- Once per run: topology, both matrices, reference shapes for the distortion measure.
+  const Topology top = build_topology(input);
+  const int n = top.nV;
+  const int nB = static_cast<int>(top.bverts.size());
+  const int nT = static_cast<int>(input.T.rows());
+  const double w2 = params.anchor_weight * params.anchor_weight;
+  std::vector<double> anchor_diag(n, 0.0);
+  for (int v : top.bverts) anchor_diag[v] = w2;
+  // §4.1 quaternion Laplace with soft anchors: (L + w² S); no pinned rows.
+  const Eigen::SparseMatrix<double> Q = laplacian_lower(top, anchor_diag, std::vector<char>(n, 0));
+  // §4.2 Eq. 1 times N_i: graph Laplacian with one Dirichlet vertex per component.
+  const Eigen::SparseMatrix<double> P = laplacian_lower(top, std::vector<double>(n, 0.0), top.pinned);
+  std::vector<Eigen::Matrix3d> Dinv0(nT);
+  parallel_range(nT, [&](int t) { Dinv0[t] = edge_matrix(input.V, input.T, t).inverse(); });
+  const double volume0 = tet_figures(input.V, input.T, Dinv0).volume;
+  res.assemble_seconds = seconds_since(t_assemble);
+
+  CholmodFactorization quat_solver, pos_solver;
+  quat_solver.factor(Q);
+  pos_solver.factor(P);
+
+  res.boundary_vertices = nB;
+  res.boundary_faces = static_cast<int>(top.F.rows());
+  res.components = static_cast<int>(top.pins.size());
+  res.mesh = input;
+  TetMesh& cur = res.mesh;
+  res.input_alignment = axis_alignment(cur.V, top.F);
+
+  // Per-iteration buffers, allocated once.
+  const double cos_feature = std::cos(params.feature_angle * kPi / 180.0);
+  RowMatrixX3d face_n(top.F.rows(), 3);  // unit face normals (0 for degenerate faces)
+  RowMatrixX3d face_a(top.F.rows(), 3);  // area vectors
+  std::vector<Eigen::Vector4d> target(nB);
+  std::vector<char> known(nB), known_next(nB), feature(nB);
+  Eigen::MatrixXd Bq = Eigen::MatrixXd::Zero(n, 4), Bp(n, 3);
+  std::vector<Eigen::Matrix3d> rot(n);
+  const Eigen::Vector4d identity(0, 0, 0, 1);
+
+  for (int it = 1; it <= params.iterations; ++it) {
+    auto t_it = Clock::now();
+    RotationIterationStats st;
+
+    // 1. Boundary normals (area weighted) and features.
+    parallel_range(static_cast<int>(top.F.rows()), [&](int f) {
+      const Eigen::Vector3d a = face_area_vector(cur.V, top.F, f);
+      const double len = a.norm();
+      face_a.row(f) = a.transpose();
+      face_n.row(f) = len > 0 ? Eigen::RowVector3d(a.transpose() / len) : Eigen::RowVector3d::Zero();
+    });
+    parallel_range(nB, [&](int b) {
+      Eigen::Vector3d nv = Eigen::Vector3d::Zero();
+      bool is_feature = false;
+      for (const int* f = top.bvert_faces.begin(b); f != top.bvert_faces.end(b); ++f) {
+        nv += face_a.row(*f).transpose();
+        if (face_n.row(*f).squaredNorm() == 0) continue;
+        for (const int* g = f + 1; g != top.bvert_faces.end(b) && !is_feature; ++g)
+          is_feature = face_n.row(*g).squaredNorm() > 0 && face_n.row(*f).dot(face_n.row(*g)) < cos_feature;
+      }
+      const double len = nv.norm();
+      feature[b] = is_feature || !(len > 0);
+      known[b] = !feature[b];
+      // 2-3. §4.1: minimal axis-aligning rotation, coherently oriented.
+      target[b] = feature[b] ? identity : coherent_quaternion(axis_aligning_rotation(nv / len));
+    });
+    st.feature_vertices = static_cast<int>(std::count(feature.begin(), feature.end(), 1));
+
+    // Feature vertices: target = normalised mean of the known targets of their surface neighbours,
+    // ring by ring (right-hand side only, the matrix keeps its anchor rows).
+    for (bool progress = true; progress;) {
+      progress = false;
+      known_next = known;
+      for (int b = 0; b < nB; ++b) {
+        if (known[b]) continue;
+        Eigen::Vector4d sum = Eigen::Vector4d::Zero();
+        for (const int* o = top.bvert_neighbours.begin(b); o != top.bvert_neighbours.end(b); ++o)
+          if (known[*o]) sum += target[*o];
+        if (sum.squaredNorm() > 0) {
+          target[b] = sum.normalized();
+          known_next[b] = 1;
+          progress = true;
+        }
+      }
+      known.swap(known_next);
+    }
+
+    // 4. Laplace per quaternion component, soft anchors on every boundary vertex.
+    for (int b = 0; b < nB; ++b) Bq.row(top.bverts[b]) = w2 * target[b].transpose();
+    const Eigen::MatrixXd q = quat_solver.solve(Bq, mode);
+
+    // 5. Normalise; per-vertex rotation matrices.
+    tbb::combinable<double> min_norm([] { return std::numeric_limits<double>::infinity(); });
+    parallel_range(n, [&](int v) {
+      const double len = q.row(v).norm();
+      min_norm.local() = std::min(min_norm.local(), len);
+      rot[v] = Eigen::Quaterniond(q(v, 3), q(v, 0), q(v, 1), q(v, 2)).normalized().toRotationMatrix();
+    });
+    st.min_quaternion_norm = min_norm.combine([](double a, double b) { return std::min(a, b); });
+    if (!(st.min_quaternion_norm > 1e-12))
+      throw SolverError("rotation_deform: degenerate quaternion (norm " + std::to_string(st.min_quaternion_norm) +
+                        ") in iteration " + std::to_string(it));
+
+    // 6. §4.2 Eq. 1 (times N_i): L v = Σ_j ½(∇_i + ∇_j)(ṽ_i - ṽ_j), pinned vertices stay.
+    parallel_range(n, [&](int i) {
+      const Eigen::Vector3d vi = cur.V.row(i).transpose();
+      if (top.pinned[i]) {
+        Bp.row(i) = vi.transpose();
+        return;
+      }
+      Eigen::Vector3d acc = Eigen::Vector3d::Zero(), pinned_sum = Eigen::Vector3d::Zero();
+      for (const int* j = top.neighbours.begin(i); j != top.neighbours.end(i); ++j) {
+        const Eigen::Vector3d vj = cur.V.row(*j).transpose();
+        acc += (rot[i] + rot[*j]) * (vi - vj);
+        if (top.pinned[*j]) pinned_sum += vj;
+      }
+      Bp.row(i) = (0.5 * acc + pinned_sum).transpose();
+    });
+    const Eigen::MatrixXd x = pos_solver.solve(Bp, mode);
+    cur.V = x;
+
+    // Figures of this iteration.
+    st.alignment = axis_alignment(cur.V, top.F);
+    const Reduction r = tet_figures(cur.V, cur.T, Dinv0);
+    st.inverted_tets = static_cast<int>(r.inverted);
+    st.distortion = r.good ? r.sum / r.good : 0.0;
+    st.distortion_max = r.max;
+    st.volume_ratio = volume0 != 0 ? r.volume / volume0 : 0.0;
+    st.seconds = seconds_since(t_it);
+    res.iterations.push_back(st);
+    if (on_iteration) on_iteration(it, cur, st);
+  }
+  res.factor_stats = quat_solver.stats();
+  res.factor_stats += pos_solver.stats();
+  return res;
+}
+
+}  // namespace polyhex
