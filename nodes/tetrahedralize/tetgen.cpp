@@ -1,0 +1,229 @@
+/// @file tetgen.cpp
+/// @brief TetGen 1.5 wrapper: flags, a crash-free driver, error translation, orientation, stats.
+#include "nodes/tetrahedralize/tetgen.h"
+
+#include <tetgen.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <mutex>
+#include <sstream>
+#include <unordered_map>
+#include <vector>
+
+#include "runtime/errors.h"
+
+namespace polyhex {
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+
+constexpr double kVolumeFactor = 1.5;
+
+std::string name_of(const SurfaceMesh& s) { return s.source.empty() ? std::string("surface") : s.source; }
+
+void validate(const SurfaceMesh& s) {
+  const std::string who = name_of(s);
+  if (s.V.rows() < 4 || s.F.rows() < 4)
+    throw InvalidInput(who + ": cannot tetrahedralize a surface with " + std::to_string(s.V.rows()) + " vertices and " +
+                       std::to_string(s.F.rows()) + " triangles (a closed surface needs at least 4 of each)");
+  if (!s.V.allFinite()) throw InvalidInput(who + ": vertex coordinates are not all finite");
+  if (s.F.minCoeff() < 0 || s.F.maxCoeff() >= s.V.rows())
+    throw InvalidInput(who + ": triangle vertex index out of range (" + std::to_string(s.V.rows()) + " vertices)");
+}
+
+std::uint64_t edge_key(int a, int b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint32_t>(b);
+}
+
+std::string tetgen_error(int code, const std::string& who) {
+  const std::string c = " (TetGen code " + std::to_string(code) + ")";
+  switch (code) {
+    case 1: return who + ": TetGen ran out of memory" + c + "; use a larger edge_length";
+    case 2: return who + ": TetGen hit an internal error" + c + "; the surface is probably degenerate or nearly self-intersecting";
+    case 3: return who + ": the surface intersects itself" + c + "; repair it before meshing";
+    case 4: return who + ": the surface has a feature smaller than TetGen's tolerance (a vertex almost on a facet or two almost coincident vertices)" + c + "; remove tiny features before meshing";
+    case 5: return who + ": two facets of the surface nearly touch or overlap" + c + "; repair it before meshing";
+    default: return who + ": TetGen failed" + c;
+  }
+}
+
+/// TetGen's robust predicates keep global state set up from each input's bounding box
+/// (exactinit), so two runs must not overlap.
+std::mutex& tetgen_mutex() {
+  static std::mutex m;
+  return m;
+}
+
+/// Runs TetGen's steps for a PLC (-p, optionally -Y) in the order of TetGen 1.5.0's own
+/// tetrahedralize(tetgenbehavior*, ...), which we cannot call: when 1.5.0 fails, terminatetetgen()
+/// frees the mesh and throws, and the destructor of the driver's local tetgenmesh frees it again
+/// while unwinding, which crashes the process (double free; girl.off triggers it). Here the mesh
+/// lives on the heap and after a failure it is deliberately not deleted: its pools are already
+/// freed, only the small shell object leaks.
+/// \throw int TetGen's error code
+void run_tetgen(tetgenbehavior& b, tetgenio& in, tetgenio& out) {
+  auto* m = new tetgenmesh();
+  m->b = &b;
+  m->in = &in;
+  m->addin = nullptr;
+  m->initializepools();
+  m->transfernodes();
+  exactinit(b.verbose, b.noexact, b.nostaticfilter, m->xmax - m->xmin, m->ymax - m->ymin, m->zmax - m->zmin);
+  clock_t tick = 0;  // TetGen's step timers, unused
+  m->incrementaldelaunay(tick);
+  m->meshsurface();
+  if (b.nobisect) m->recoverboundary(tick);   // -Y: recover the input facets without splitting them
+  else m->constraineddelaunay(tick);
+  m->carveholes();                            // remove the tets outside the surface
+  if (b.nobisect) {
+    if (m->subvertstack->objects > 0) m->suppresssteinerpoints();
+    m->recoverdelaunay();
+  }
+  if (b.quality) m->delaunayrefinement();     // -q and -a
+  if (b.optlevel > 0) m->optimizemesh();      // default -O2/7: flips and smoothing
+  if (!b.nojettison && (m->dupverts > 0 || m->unuverts > 0)) m->jettisonnodes();
+  out.firstnumber = in.firstnumber;
+  out.mesh_dim = in.mesh_dim;
+  m->outnodes(&out);
+  if (m->tetrahedrons->items > 0) m->outelements(&out);
+  delete m;
+}
+
+double tet_volume6(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) { return (b - a).cross(c - a).dot(d - a); }
+
+}  // namespace
+
+TetgenStats tet_stats(const TetMesh& mesh, double h) {
+  TetgenStats s;
+  s.tets = mesh.T.rows();
+  s.vertices = mesh.V.rows();
+  s.target_edge = h;
+  if (mesh.T.rows() == 0) return s;
+  auto P = [&](int i) -> Vec3 { return mesh.V.row(i).transpose(); };
+  static const int kEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+  std::unordered_map<std::uint64_t, double> edges;
+  double min_normal_dot = 2;  // smallest n_k.n_l over all tets: gives the smallest dihedral angle
+  s.max_radius_edge = 0;
+  for (Eigen::Index t = 0; t < mesh.T.rows(); ++t) {
+    Vec3 p[4];
+    for (int k = 0; k < 4; ++k) p[k] = P(mesh.T(t, k));
+    double shortest = INFINITY;
+    for (auto& e : kEdges) {
+      double len = (p[e[0]] - p[e[1]]).norm();
+      shortest = std::min(shortest, len);
+      edges.emplace(edge_key(mesh.T(t, e[0]), mesh.T(t, e[1])), len);
+    }
+    // Outward face normals: n[k] is the normal of the face opposite vertex k. The dihedral angle at
+    // the edge shared by faces k and l is pi - angle(n[k], n[l]).
+    Vec3 n[4];
+    for (int k = 0; k < 4; ++k) {
+      const Vec3 &a = p[(k + 1) % 4], &b = p[(k + 2) % 4], &c = p[(k + 3) % 4];
+      Vec3 nk = (b - a).cross(c - a);
+      if (nk.dot(p[k] - a) > 0) nk = -nk;
+      n[k] = nk.normalized();
+    }
+    for (int k = 0; k < 4; ++k)
+      for (int l = k + 1; l < 4; ++l) min_normal_dot = std::min(min_normal_dot, n[k].dot(n[l]));
+    // Circumradius: |a|^2 (b x c) + |b|^2 (c x a) + |c|^2 (a x b) over 2 a.(b x c), a, b, c from p0.
+    Vec3 a = p[1] - p[0], b = p[2] - p[0], c = p[3] - p[0];
+    Vec3 num = a.squaredNorm() * b.cross(c) + b.squaredNorm() * c.cross(a) + c.squaredNorm() * a.cross(b);
+    double radius = num.norm() / std::abs(2 * a.dot(b.cross(c)));
+    s.max_radius_edge = std::max(s.max_radius_edge, radius / shortest);
+  }
+  // smallest dihedral = pi - largest angle between outward normals = acos(-min n_k.n_l)
+  s.min_dihedral_deg = std::acos(std::clamp(-min_normal_dot, -1.0, 1.0)) * 180.0 / M_PI;
+  s.edge_min = INFINITY;
+  double sum = 0;
+  for (auto& [key, len] : edges) {
+    s.edge_min = std::min(s.edge_min, len);
+    s.edge_max = std::max(s.edge_max, len);
+    sum += len;
+  }
+  s.edge_min /= h;
+  s.edge_max /= h;
+  s.edge_mean = sum / static_cast<double>(edges.size()) / h;
+  return s;
+}
+
+TetMesh tetrahedralize(const SurfaceMesh& surface, const TetgenParams& p, TetgenStats* stats) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::string who = name_of(surface);
+  validate(surface);
+  if (!(p.edge_length > 0)) throw InvalidInput(who + ": edge_length must be positive");
+  const double diag = (surface.V.colwise().maxCoeff() - surface.V.colwise().minCoeff()).norm();
+  const double h = p.edge_length * diag;
+
+  const RowMatrixX3d& V = surface.V;
+  const RowMatrixX3i& F = surface.F;
+  tetgenio in, out;
+  in.firstnumber = 0;
+  in.numberofpoints = static_cast<int>(V.rows());
+  in.pointlist = new REAL[3 * V.rows()];
+  std::copy(V.data(), V.data() + 3 * V.rows(), in.pointlist);  // row-major: x0 y0 z0 x1 ...
+  in.numberoffacets = static_cast<int>(F.rows());
+  in.facetlist = new tetgenio::facet[F.rows()];
+  for (Eigen::Index i = 0; i < F.rows(); ++i) {
+    tetgenio::facet& f = in.facetlist[i];
+    tetgenio::init(&f);
+    f.numberofpolygons = 1;
+    f.polygonlist = new tetgenio::polygon[1];
+    tetgenio::init(&f.polygonlist[0]);
+    f.polygonlist[0].numberofvertices = 3;
+    f.polygonlist[0].vertexlist = new int[3]{F(i, 0), F(i, 1), F(i, 2)};
+  }
+
+  // TetGen's -a is an upper bound and the refined tets come out smaller, so the bound is 1.5 times
+  // the volume of a regular tet of edge h (h^3 / (6 sqrt 2) ~ 0.118 h^3): measured, this puts the
+  // mean interior edge at 0.95-1.0 h (sphere) and the mean edge of a box mesh at 0.93 h, where the
+  // plain regular-tet bound gave 0.85 h and 0.78 h.
+  const double max_volume = kVolumeFactor * h * h * h / (6.0 * std::sqrt(2.0));
+  std::ostringstream sw;
+  sw.precision(17);
+  sw << "pzQq" << p.radius_edge << "/" << p.min_dihedral << "a" << max_volume << (p.refine_surface ? "" : "Y");
+  std::string switches = sw.str();
+  {
+    std::lock_guard<std::mutex> lock(tetgen_mutex());
+    try {
+      tetgenbehavior b;
+      if (!b.parse_commandline(switches.data())) throw InvalidInput(who + ": bad TetGen switches " + switches);
+      run_tetgen(b, in, out);
+    } catch (int code) {
+      throw InvalidInput(tetgen_error(code, who));
+    }
+  }
+  if (out.numberoftetrahedra <= 0 || out.numberofcorners != 4)
+    throw InvalidInput(who + ": TetGen produced no tetrahedra; is the surface closed?");
+
+  // Copy, orient every tet positively and drop unused points.
+  TetMesh m;
+  m.source = surface.source;
+  std::vector<int> remap(out.numberofpoints, -1);
+  int nv = 0;
+  m.T.resize(out.numberoftetrahedra, 4);
+  for (int t = 0; t < out.numberoftetrahedra; ++t)
+    for (int k = 0; k < 4; ++k) {
+      int v = out.tetrahedronlist[4 * t + k];
+      if (remap[v] < 0) remap[v] = nv++;
+      m.T(t, k) = remap[v];
+    }
+  m.V.resize(nv, 3);
+  for (int i = 0; i < out.numberofpoints; ++i)
+    if (remap[i] >= 0) m.V.row(remap[i]) << out.pointlist[3 * i], out.pointlist[3 * i + 1], out.pointlist[3 * i + 2];
+  for (Eigen::Index t = 0; t < m.T.rows(); ++t) {
+    Vec3 a = m.V.row(m.T(t, 0)), b = m.V.row(m.T(t, 1)), c = m.V.row(m.T(t, 2)), d = m.V.row(m.T(t, 3));
+    if (tet_volume6(a, b, c, d) < 0) std::swap(m.T(t, 1), m.T(t, 2));
+  }
+
+  if (stats) {
+    *stats = tet_stats(m, h);
+    stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  return m;
+}
+
+}  // namespace polyhex

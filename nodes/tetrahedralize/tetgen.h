@@ -1,0 +1,55 @@
+/// @file tetgen.h
+/// @brief Isotropic tetrahedral meshing of a closed surface with TetGen 1.5 (the paper's input is a
+/// tet mesh of 100k-200k tets, Gregson et al. 2011 §7).
+#pragma once
+
+#include "nodes/artefacts/meshes.h"
+
+namespace polyhex {
+
+struct TetgenParams {
+  double edge_length = 0.02;   ///< target tet edge length, fraction of the input bounding-box diagonal
+  double radius_edge = 1.5;    ///< quality bound on circumradius / shortest edge (TetGen -q<ratio>)
+  double min_dihedral = 10.0;  ///< dihedral angle bound in degrees (TetGen -q<ratio>/<angle>)
+  bool refine_surface = true;  ///< false keeps the input surface triangles untouched (TetGen -Y)
+};
+
+/// Figures describing a tet mesh, for the report.
+struct TetgenStats {
+  long tets = 0;
+  long vertices = 0;
+  double target_edge = 0;        ///< h, absolute target edge length (edge_length x bbox diagonal)
+  double edge_min = 0;           ///< shortest edge / h
+  double edge_max = 0;           ///< longest edge / h
+  double edge_mean = 0;          ///< mean edge / h (each edge counted once)
+  double min_dihedral_deg = 0;   ///< smallest dihedral angle over all tets, degrees
+  double max_radius_edge = 0;    ///< largest circumradius / shortest edge over all tets
+  double seconds = 0;            ///< wall time of the whole call
+};
+
+/// Tetrahedralizes the solid bounded by a closed surface with TetGen (flags `pq<ratio>/<angle>a<vol>zQ`,
+/// plus `Y` when refine_surface is false). h = edge_length x bbox diagonal; the volume bound is 1.5
+/// times that of a regular tet of edge h (1.5 x 0.118 h^3), which puts the mean interior edge at
+/// about h. Long thin input triangles (coarse CAD tessellations) are split by TetGen's own boundary
+/// refinement (-q without -Y), which gives isotropic tets there; with refine_surface = false they are
+/// kept and the tets along them are as thin as they are. Near a surface finer than h the tets follow
+/// the surface size (TetGen grades from the boundary inwards).
+/// TetGen runs are serialised (its geometric predicates keep input-dependent global state).
+/// Nothing is printed (TetGen's -Q).
+///
+/// \param surface  closed, outward-oriented triangle surface, V #V by 3, F #F by 3
+/// \param p        params; edge_length in (0, 0.5]
+/// \param stats    optional, filled with the figures of the result
+/// \return tets T #T by 4, all positively oriented, every vertex used; source = surface.source
+/// \pre surface is closed and does not intersect itself
+/// \throw InvalidInput for an empty or malformed surface (index out of range, non-finite
+///        coordinates), a non-positive edge_length, and for every TetGen failure: the message names
+///        surface.source and the cause (self-intersection, tiny feature, nearly touching facets,
+///        out of memory, internal error) with TetGen's code.
+TetMesh tetrahedralize(const SurfaceMesh& surface, const TetgenParams& p, TetgenStats* stats = nullptr);
+
+/// Quality figures of a tet mesh against the target edge h (every field of TetgenStats but seconds).
+/// \pre T indexes rows of V; h > 0
+TetgenStats tet_stats(const TetMesh& mesh, double h);
+
+}  // namespace polyhex
