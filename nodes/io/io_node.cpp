@@ -1,0 +1,112 @@
+// Node bindings of the mesh readers and writers (read_surface, read_tetmesh, write_hex,
+// write_tetmesh) and the --save-all savers of SurfaceMesh, TetMesh and HexMesh.
+#include <filesystem>
+#include <memory>
+
+#include "graph/node.h"
+#include "nodes/io/hexmesh_io.h"
+#include "nodes/io/surface_io.h"
+#include "nodes/io/tetmesh_io.h"
+
+namespace polyhex {
+namespace {
+
+struct ReadSurfaceParams {
+  std::string path;  ///< .obj .off .stl .ply file, or `shape:NAME` for a built-in shape
+};
+struct ReadTetmeshParams {
+  std::string path;  ///< .mesh .vtk .msh .node/.ele file
+};
+struct WriteHexParams {
+  std::string path = "hex.vtk";  ///< output file; a relative path is relative to the output folder
+  std::string format = "auto";   ///< auto (by extension) | vtk | vtk_binary | mesh | msh
+};
+struct WriteTetmeshParams {
+  std::string path = "tets.vtk";  ///< output file; a relative path is relative to the output folder
+  std::string format = "auto";    ///< auto (by extension) | vtk | vtk_binary | mesh | msh
+};
+
+const std::vector<std::string> kFormats = {"auto", "vtk", "vtk_binary", "mesh", "msh"};
+
+void require_path(const std::string& path) {
+  if (path.empty()) throw InvalidInput("param `path` is empty: give a mesh file (or shape:NAME for a surface)");
+}
+
+// Resolves an output path against the run's output folder and creates its folder.
+std::filesystem::path output_path(const std::string& path, const NodeContext& ctx) {
+  require_path(path);
+  std::filesystem::path p(path);
+  if (p.is_relative()) p = ctx.out_dir / p;
+  if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path());
+  return p;
+}
+
+const bool registered_read_surface = register_node(make_node<ReadSurfaceParams>(
+    "read_surface", "Reads and checks a closed triangle surface (OBJ, OFF, STL, PLY, or shape:NAME)",
+    ParamSet<ReadSurfaceParams>().add("path", &ReadSurfaceParams::path, "surface file, or shape:NAME"), {},
+    artefact_name<SurfaceMesh>(), [](const ReadSurfaceParams& p, const Inputs&, NodeContext& ctx) {
+      require_path(p.path);
+      SurfaceReadReport r;
+      SurfaceMesh m = read_surface(p.path, &r);
+      ctx.metrics["vertices"] = r.vertices;
+      ctx.metrics["faces"] = r.faces;
+      ctx.metrics["welded"] = r.welded;
+      ctx.metrics["flipped"] = r.flipped;
+      ctx.metrics["genus"] = r.genus;
+      ctx.metrics["components"] = r.components;
+      for (auto& w : r.warnings) ctx.warn(w);
+      return make_artefact(std::move(m));
+    }));
+
+const bool registered_read_tetmesh = register_node(make_node<ReadTetmeshParams>(
+    "read_tetmesh", "Reads a tet mesh (Medit .mesh, legacy VTK, Gmsh .msh 2.2/4.1, TetGen .node/.ele)",
+    ParamSet<ReadTetmeshParams>().add("path", &ReadTetmeshParams::path, "tet mesh file"), {},
+    artefact_name<TetMesh>(), [](const ReadTetmeshParams& p, const Inputs&, NodeContext& ctx) {
+      require_path(p.path);
+      TetReadReport r;
+      TetMesh m = read_tetmesh(p.path, &r);
+      ctx.metrics["vertices"] = r.vertices;
+      ctx.metrics["tets"] = r.tets;
+      ctx.metrics["reoriented"] = r.reoriented;
+      for (auto& w : r.warnings) ctx.warn(w);
+      return make_artefact(std::move(m));
+    }));
+
+// write_hex and write_tetmesh: the same sink for a mesh type M written by `write`.
+template <class M, class P>
+NodeSpec writer_node(const std::string& type, const std::string& what,
+                     void (*write)(const M&, const std::filesystem::path&, const std::string&, const CellData&)) {
+  return make_node<P>(
+      type, "Writes the " + what + " mesh (legacy VTK ASCII/binary, Medit .mesh, Gmsh .msh 4.1)",
+      ParamSet<P>()
+          .add("path", &P::path, "output file, relative to the output folder")
+          .add_choice("format", &P::format, kFormats, "auto (by extension), vtk, vtk_binary, mesh, msh"),
+      {{"mesh", artefact_name<M>()}}, "", [write](const P& p, const Inputs& in, NodeContext& ctx) {
+        const auto out = output_path(p.path, ctx);
+        write(*in.get<M>(0), out, p.format, CellData{});
+        ctx.metrics["path"] = out.string();
+        ctx.metrics["bytes"] = std::filesystem::file_size(out);
+        return Artefact{};
+      });
+}
+
+const bool registered_write_hex = register_node(writer_node<HexMesh, WriteHexParams>("write_hex", "hex", &write_hexmesh));
+const bool registered_write_tetmesh =
+    register_node(writer_node<TetMesh, WriteTetmeshParams>("write_tetmesh", "tet", &write_tetmesh));
+
+const bool registered_savers = [] {
+  auto& reg = Registry::instance();
+  reg.add_saver(artefact_name<SurfaceMesh>(), ".obj", [](const Artefact& a, const std::filesystem::path& p) {
+    write_surface(*a.as<SurfaceMesh>(), p);
+  });
+  reg.add_saver(artefact_name<TetMesh>(), ".vtk", [](const Artefact& a, const std::filesystem::path& p) {
+    write_tetmesh(*a.as<TetMesh>(), p, "vtk");
+  });
+  reg.add_saver(artefact_name<HexMesh>(), ".vtk", [](const Artefact& a, const std::filesystem::path& p) {
+    write_hexmesh(*a.as<HexMesh>(), p, "vtk");
+  });
+  return true;
+}();
+
+}  // namespace
+}  // namespace polyhex

@@ -1,0 +1,628 @@
+#include "nodes/io/mesh_formats.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <type_traits>
+#include <unordered_map>
+
+#include "nodes/io/text_cursor.h"
+#include "runtime/atomic_file.h"
+#include "runtime/errors.h"
+
+namespace polyhex {
+
+using io_detail::append_big_endian;
+using io_detail::append_double;
+using io_detail::append_int;
+using io_detail::BinaryCursor;
+using io_detail::TextCursor;
+
+MeshFormat choose_mesh_format(const std::string& format, const std::filesystem::path& path) {
+  if (format == "vtk") return MeshFormat::VtkAscii;
+  if (format == "vtk_binary") return MeshFormat::VtkBinary;
+  if (format == "mesh") return MeshFormat::Medit;
+  if (format == "msh") return MeshFormat::Gmsh;
+  if (format != "auto")
+    throw ConfigError("unknown mesh format `" + format + "`; valid formats: auto, vtk, vtk_binary, mesh, msh");
+  const std::string ext = io_detail::lower_extension(path);
+  if (ext == ".vtk") return MeshFormat::VtkAscii;
+  if (ext == ".mesh") return MeshFormat::Medit;
+  if (ext == ".msh") return MeshFormat::Gmsh;
+  throw IOError(path.string() + ": unknown extension `" + ext + "` (expected .vtk, .mesh or .msh)");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writers
+
+namespace io_detail {
+
+void write_buffer(const std::filesystem::path& path, const std::string& buffer, bool binary) {
+  write_file_atomic(path, [&](std::ostream& os) { os.write(buffer.data(), std::streamsize(buffer.size())); },
+                    binary);
+}
+
+void append_vtk_header(std::string& out, const std::string& title, bool binary, const std::string& dataset) {
+  out += "# vtk DataFile Version 2.0\n";
+  out += title + "\n";
+  out += binary ? "BINARY\n" : "ASCII\n";
+  out += "DATASET " + dataset + "\n";
+}
+
+void append_vtk_points(std::string& out, const RowMatrixX3d& V, bool binary) {
+  out += "POINTS " + std::to_string(V.rows()) + " double\n";
+  for (Eigen::Index i = 0; i < V.rows(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      if (binary) {
+        append_big_endian<double>(out, V(i, k));
+      } else {
+        if (k) out += ' ';
+        append_double(out, V(i, k));
+      }
+    }
+    if (!binary) out += '\n';
+  }
+  if (binary) out += '\n';
+}
+
+namespace {
+void check_array_name(const std::string& name, size_t size, Eigen::Index cells, const std::string& file) {
+  if (name.empty() || name.find_first_of(" \t\n") != std::string::npos)
+    throw InvalidInput(file + ": cell data name `" + name + "` must be one word");
+  if (Eigen::Index(size) != cells)
+    throw InvalidInput(file + ": cell data `" + name + "` has " + std::to_string(size) + " values for " +
+                       std::to_string(cells) + " cells");
+}
+}  // namespace
+
+namespace {
+template <class T>
+void append_vtk_array(std::string& out, const std::string& name, const std::vector<T>& values, Eigen::Index cells,
+                      bool binary, const std::string& file) {
+  check_array_name(name, values.size(), cells, file);
+  using Stored = std::conditional_t<std::is_same_v<T, int>, int32_t, double>;
+  out += "SCALARS " + name + (std::is_same_v<T, int> ? " int" : " double") + " 1\nLOOKUP_TABLE default\n";
+  for (T v : values) {
+    if (binary) {
+      append_big_endian<Stored>(out, Stored(v));
+    } else {
+      if constexpr (std::is_same_v<T, int>) append_int(out, v);
+      else append_double(out, v);
+      out += '\n';
+    }
+  }
+  if (binary) out += '\n';
+}
+}  // namespace
+
+void append_vtk_cell_data(std::string& out, const CellData& data, Eigen::Index cells, bool binary,
+                          const std::string& file) {
+  if (data.empty()) return;
+  out += "CELL_DATA " + std::to_string(cells) + "\n";
+  for (auto& [name, values] : data.ints) append_vtk_array(out, name, values, cells, binary, file);
+  for (auto& [name, values] : data.reals) append_vtk_array(out, name, values, cells, binary, file);
+}
+
+}  // namespace io_detail
+
+void write_vtk_cells(const std::filesystem::path& path, const RowMatrixX3d& V, CellBlock cells, int vtk_type,
+                     bool binary, const CellData& cell_data) {
+  std::string out;
+  out.reserve(size_t(V.rows()) * 60 + size_t(cells.rows) * (cells.cols + 2) * 8 + 256);
+  io_detail::append_vtk_header(out, "polyhex mesh", binary, "UNSTRUCTURED_GRID");
+  io_detail::append_vtk_points(out, V, binary);
+  const Eigen::Index n = cells.rows;
+  out += "CELLS " + std::to_string(n) + " " + std::to_string(n * (cells.cols + 1)) + "\n";
+  for (Eigen::Index c = 0; c < n; ++c) {
+    const int* row = cells.data + c * cells.cols;
+    if (binary) {
+      append_big_endian<int32_t>(out, cells.cols);
+      for (int k = 0; k < cells.cols; ++k) append_big_endian<int32_t>(out, row[k]);
+    } else {
+      append_int(out, cells.cols);
+      for (int k = 0; k < cells.cols; ++k) {
+        out += ' ';
+        append_int(out, row[k]);
+      }
+      out += '\n';
+    }
+  }
+  if (binary) out += '\n';
+  out += "CELL_TYPES " + std::to_string(n) + "\n";
+  for (Eigen::Index c = 0; c < n; ++c) {
+    if (binary) {
+      append_big_endian<int32_t>(out, vtk_type);
+    } else {
+      append_int(out, vtk_type);
+      out += '\n';
+    }
+  }
+  if (binary) out += '\n';
+  io_detail::append_vtk_cell_data(out, cell_data, n, binary, path.string());
+  io_detail::write_buffer(path, out, binary);
+}
+
+void write_medit_cells(const std::filesystem::path& path, const RowMatrixX3d& V, CellBlock cells,
+                       const std::string& section) {
+  std::string out;
+  out.reserve(size_t(V.rows()) * 60 + size_t(cells.rows) * (cells.cols + 1) * 8 + 256);
+  out += "MeshVersionFormatted 2\n\nDimension 3\n\nVertices\n" + std::to_string(V.rows()) + "\n";
+  for (Eigen::Index i = 0; i < V.rows(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      append_double(out, V(i, k));
+      out += ' ';
+    }
+    out += "0\n";
+  }
+  out += "\n" + section + "\n" + std::to_string(cells.rows) + "\n";
+  for (Eigen::Index c = 0; c < cells.rows; ++c) {
+    const int* row = cells.data + c * cells.cols;
+    for (int k = 0; k < cells.cols; ++k) {
+      append_int(out, row[k] + 1);
+      out += ' ';
+    }
+    out += "0\n";
+  }
+  out += "\nEnd\n";
+  io_detail::write_buffer(path, out, false);
+}
+
+void write_gmsh_cells(const std::filesystem::path& path, const RowMatrixX3d& V, CellBlock cells, int gmsh_type) {
+  std::string out;
+  out.reserve(size_t(V.rows()) * 70 + size_t(cells.rows) * (cells.cols + 1) * 8 + 512);
+  const std::string nv = std::to_string(V.rows()), nc = std::to_string(cells.rows);
+  out += "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n";
+  // One volume entity (tag 1) holding every node and element: Gmsh needs the entity for its blocks.
+  out += "$Entities\n0 0 0 1\n1";
+  for (int k = 0; k < 3; ++k) {
+    out += ' ';
+    append_double(out, V.rows() ? V.col(k).minCoeff() : 0.0);
+  }
+  for (int k = 0; k < 3; ++k) {
+    out += ' ';
+    append_double(out, V.rows() ? V.col(k).maxCoeff() : 0.0);
+  }
+  out += " 0 0\n$EndEntities\n";
+  out += "$Nodes\n1 " + nv + " 1 " + nv + "\n3 1 0 " + nv + "\n";
+  for (Eigen::Index i = 0; i < V.rows(); ++i) {
+    append_int(out, i + 1);
+    out += '\n';
+  }
+  for (Eigen::Index i = 0; i < V.rows(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      if (k) out += ' ';
+      append_double(out, V(i, k));
+    }
+    out += '\n';
+  }
+  out += "$EndNodes\n$Elements\n1 " + nc + " 1 " + nc + "\n3 1 " + std::to_string(gmsh_type) + " " + nc + "\n";
+  for (Eigen::Index c = 0; c < cells.rows; ++c) {
+    const int* row = cells.data + c * cells.cols;
+    append_int(out, c + 1);
+    for (int k = 0; k < cells.cols; ++k) {
+      out += ' ';
+      append_int(out, row[k] + 1);
+    }
+    out += '\n';
+  }
+  out += "$EndElements\n";
+  io_detail::write_buffer(path, out, false);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Readers
+
+namespace {
+
+RowMatrixX3d to_matrix(const std::vector<double>& xyz) {
+  RowMatrixX3d V(Eigen::Index(xyz.size() / 3), 3);
+  std::copy(xyz.begin(), xyz.end(), V.data());
+  return V;
+}
+
+std::string plural(size_t n, const std::string& what) {
+  return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
+}
+
+// A number of a legacy VTK data block, ASCII or binary.
+struct VtkValues {
+  TextCursor& text;
+  bool binary;
+  std::string file;
+
+  // Reads n values of VTK type `type` (float, double, int, ...) into out (as double).
+  void read(const std::string& type, size_t n, std::vector<double>& out, const std::string& what) {
+    out.resize(n);
+    if (!binary) {
+      for (size_t i = 0; i < n; ++i) out[i] = text.real(what);
+      return;
+    }
+    BinaryCursor b(text.text(), text.pos(), true, file);
+    for (size_t i = 0; i < n; ++i) {
+      if (type == "double") out[i] = b.get<double>(what);
+      else if (type == "float") out[i] = b.get<float>(what);
+      else if (type == "int" || type == "vtktypeint32") out[i] = b.get<int32_t>(what);
+      else if (type == "unsigned_int") out[i] = b.get<uint32_t>(what);
+      else if (type == "long" || type == "vtktypeint64") out[i] = double(b.get<int64_t>(what));
+      else if (type == "unsigned_long") out[i] = double(b.get<uint64_t>(what));
+      else if (type == "short") out[i] = b.get<int16_t>(what);
+      else if (type == "unsigned_short") out[i] = b.get<uint16_t>(what);
+      else if (type == "char") out[i] = b.get<int8_t>(what);
+      else if (type == "unsigned_char") out[i] = b.get<uint8_t>(what);
+      else text.fail("unsupported binary data type `" + type + "` in " + what);
+      if (!std::isfinite(out[i])) text.fail(what + " " + std::to_string(i) + " is not finite");
+    }
+    text.seek(b.pos());
+  }
+  void read_ints(size_t n, std::vector<long long>& out, const std::string& what) {
+    out.resize(n);
+    if (!binary) {
+      for (size_t i = 0; i < n; ++i) out[i] = text.integer(what);
+      return;
+    }
+    BinaryCursor b(text.text(), text.pos(), true, file);
+    for (size_t i = 0; i < n; ++i) out[i] = b.get<int32_t>(what);
+    text.seek(b.pos());
+  }
+};
+
+long long count_field(TextCursor& c, const std::vector<std::string_view>& w, size_t i, const std::string& what) {
+  long long n;
+  if (w.size() <= i || !io_detail::parse_int(w[i], n) || n < 0) c.fail("expected " + what + " (a count)");
+  return n;
+}
+
+std::string vertex_count(size_t nv) { return std::to_string(nv) + (nv == 1 ? " vertex" : " vertices"); }
+
+[[noreturn]] void index_error(const std::string& file, const std::string& what, long long v, size_t nv) {
+  throw IOError(file + ": " + what + ": vertex index " + std::to_string(v) + " out of range (" + vertex_count(nv) +
+                ")");
+}
+
+}  // namespace
+
+CellsRead read_vtk_cells(const std::filesystem::path& path, int vtk_type, int nodes) {
+  const std::string file = path.string();
+  const std::string data = io_detail::load_file(path);
+  TextCursor c(data, file);
+  std::string_view l;
+  if (!c.line(l) || l.rfind("# vtk DataFile Version", 0) != 0)
+    throw IOError(file + ": not a legacy VTK file (the first line must be `# vtk DataFile Version x.y`)");
+  if (!c.line(l)) c.fail("truncated: no title line");
+  if (!c.next_line(l)) c.fail("truncated: expected ASCII or BINARY");
+  bool binary;
+  if (l == "ASCII") binary = false;
+  else if (l == "BINARY") binary = true;
+  else c.fail("expected ASCII or BINARY, got `" + std::string(l) + "`");
+  std::vector<std::string_view> w;
+  if (!c.next_line(l)) c.fail("truncated: expected DATASET UNSTRUCTURED_GRID");
+  io_detail::split_blanks(l, w);
+  if (w.size() != 2 || w[0] != "DATASET") c.fail("expected DATASET UNSTRUCTURED_GRID, got `" + std::string(l) + "`");
+  if (w[1] != "UNSTRUCTURED_GRID")
+    c.fail("DATASET " + std::string(w[1]) + " is not supported (expected UNSTRUCTURED_GRID)");
+
+  VtkValues values{c, binary, file};
+  std::vector<double> xyz;
+  std::vector<long long> conn, types;
+  bool have_points = false, have_cells = false, have_types = false;
+  long long ncells = 0;
+  while (c.next_line(l)) {
+    io_detail::split_blanks(l, w);
+    if (w[0] == "POINTS") {
+      long long n = count_field(c, w, 1, "number of points");
+      std::string type = w.size() > 2 ? std::string(w[2]) : "float";
+      values.read(type, size_t(3 * n), xyz, "point coordinate");
+      have_points = true;
+    } else if (w[0] == "CELLS") {
+      ncells = count_field(c, w, 1, "number of cells");
+      long long size = count_field(c, w, 2, "CELLS size");
+      size_t save = c.pos();
+      std::string_view peek;
+      if (c.next(peek) && peek == "OFFSETS")
+        c.fail("VTK 5 OFFSETS/CONNECTIVITY cells are not supported; write legacy VTK (classic CELLS n size)");
+      c.seek(save);
+      values.read_ints(size_t(size), conn, "CELLS data");
+      have_cells = true;
+    } else if (w[0] == "CELL_TYPES") {
+      long long n = count_field(c, w, 1, "number of cell types");
+      if (have_cells && n != ncells)
+        c.fail("CELL_TYPES lists " + std::to_string(n) + " cells but CELLS " + std::to_string(ncells) +
+               " (wrong counts)");
+      values.read_ints(size_t(n), types, "CELL_TYPES data");
+      have_types = true;
+    } else if (w[0] == "METADATA") {
+      while (c.line(l) && !l.empty()) {
+      }
+    } else if (w[0] == "CELL_DATA" || w[0] == "POINT_DATA" || w[0] == "FIELD") {
+      break;  // attribute data is not needed by the readers
+    } else {
+      c.fail("unexpected `" + std::string(w[0]) + "` (expected POINTS, CELLS or CELL_TYPES)");
+    }
+  }
+  if (!have_points) throw IOError(file + ": no POINTS section");
+  if (!have_cells) throw IOError(file + ": no CELLS section");
+  if (!have_types) throw IOError(file + ": no CELL_TYPES section");
+  if ((long long)types.size() != ncells)
+    throw IOError(file + ": CELL_TYPES lists " + std::to_string(types.size()) + " cells but CELLS " +
+                  std::to_string(ncells) + " (wrong counts)");
+
+  CellsRead r;
+  r.V = to_matrix(xyz);
+  const size_t nv = size_t(r.V.rows());
+  std::map<long long, size_t> ignored;
+  size_t p = 0;
+  for (long long i = 0; i < ncells; ++i) {
+    if (p >= conn.size() || conn[p] < 0 || p + 1 + size_t(conn[p]) > conn.size())
+      throw IOError(file + ": CELLS data ends inside cell " + std::to_string(i) + " (wrong CELLS size or counts)");
+    const size_t k = size_t(conn[p]);
+    if (types[size_t(i)] == vtk_type) {
+      if (k != size_t(nodes))
+        throw IOError(file + ": cell " + std::to_string(i) + " of type " + std::to_string(vtk_type) + " has " +
+                      std::to_string(k) + " vertices, expected " + std::to_string(nodes));
+      for (size_t j = 0; j < k; ++j) {
+        long long v = conn[p + 1 + j];
+        if (v < 0 || v >= (long long)nv) index_error(file, "cell " + std::to_string(i), v, nv);
+        r.cells.push_back(int(v));
+      }
+    } else {
+      ++ignored[types[size_t(i)]];
+    }
+    p += 1 + k;
+  }
+  if (p != conn.size())
+    throw IOError(file + ": CELLS size is " + std::to_string(conn.size()) + " but the " + std::to_string(ncells) +
+                  " cells use " + std::to_string(p) + " values (wrong counts)");
+  for (auto& [type, n] : ignored)
+    r.warnings.push_back(file + ": ignored " + plural(n, "cell") + " of VTK type " + std::to_string(type) +
+                         " (only type " + std::to_string(vtk_type) + " is read)");
+  return r;
+}
+
+CellsRead read_medit_cells(const std::filesystem::path& path, const std::string& section, int nodes) {
+  const std::string file = path.string();
+  const std::string data = io_detail::load_file(path);
+  TextCursor c(data, file, '#');
+  // Entries per element of the sections we skip (vertex indices + reference).
+  static const std::map<std::string, int, std::less<>> skip = {
+      {"Vertices", 4},         {"Edges", 3},         {"Triangles", 4},        {"Quadrilaterals", 5},
+      {"Tetrahedra", 5},       {"Hexahedra", 9},     {"Prisms", 7},           {"Pyramids", 6},
+      {"Corners", 1},          {"Ridges", 1},        {"RequiredVertices", 1}, {"RequiredEdges", 1},
+      {"RequiredTriangles", 1}, {"RequiredQuadrilaterals", 1}, {"Normals", 3}, {"Tangents", 3},
+      {"NormalAtVertices", 2}, {"TangentAtVertices", 2}, {"NormalAtTriangleVertices", 3},
+      {"TangentAtEdgeVertices", 3}};
+  CellsRead r;
+  std::vector<double> xyz;
+  std::vector<long long> raw;  // 1-based indices, checked once the vertex count is known
+  std::vector<int> cell_line;
+  bool have_vertices = false, have_cells = false;
+  std::string_view tok;
+  bool pending = false;
+  while (pending || c.next(tok)) {
+    pending = false;
+    double num;
+    if (io_detail::parse_double(tok, num))
+      c.fail("expected a section keyword, got `" + std::string(tok) + "` (wrong counts?)");
+    const std::string key(tok);
+    if (key == "End") break;
+    if (key == "MeshVersionFormatted") {
+      c.integer("MeshVersionFormatted value");
+    } else if (key == "Dimension") {
+      long long d = c.integer("dimension");
+      if (d != 3) c.fail("Dimension " + std::to_string(d) + " is not supported (expected 3)");
+    } else if (key == "Vertices") {
+      long long n = c.integer("number of vertices");
+      if (n < 0) c.fail("negative vertex count");
+      xyz.resize(size_t(3 * n));
+      for (long long i = 0; i < n; ++i) {
+        for (int k = 0; k < 3; ++k) xyz[size_t(3 * i + k)] = c.real("vertex coordinate");
+        c.integer("vertex reference");
+      }
+      have_vertices = true;
+    } else if (key == section) {
+      long long n = c.integer("number of " + section);
+      if (n < 0) c.fail("negative " + section + " count");
+      raw.resize(size_t(n * nodes));
+      cell_line.resize(size_t(n));
+      for (long long i = 0; i < n; ++i) {
+        for (int k = 0; k < nodes; ++k) {
+          raw[size_t(i * nodes + k)] = c.integer(section + " vertex index");
+          if (k == 0) cell_line[size_t(i)] = c.line_no();
+        }
+        c.integer(section + " reference");
+      }
+      have_cells = true;
+    } else if (auto it = skip.find(key); it != skip.end()) {
+      long long n = c.integer("number of " + key);
+      for (long long i = 0; i < n * it->second; ++i) c.token(key + " entry");
+    } else {
+      // Unknown section: skip its numbers up to the next keyword.
+      r.warnings.push_back(file + ": line " + std::to_string(c.line_no()) + ": ignored unknown section `" + key + "`");
+      while (c.next(tok)) {
+        if (!io_detail::parse_double(tok, num)) {
+          pending = true;
+          break;
+        }
+      }
+    }
+  }
+  if (!have_vertices) throw IOError(file + ": no Vertices section");
+  if (!have_cells) throw IOError(file + ": no " + section + " section");
+  r.V = to_matrix(xyz);
+  const size_t nv = size_t(r.V.rows());
+  r.cells.resize(raw.size());
+  for (size_t i = 0; i < raw.size(); ++i) {
+    if (raw[i] < 1 || raw[i] > (long long)nv)
+      throw IOError(file + ": line " + std::to_string(cell_line[i / nodes]) + ": " + section + " entry " +
+                    std::to_string(i / nodes + 1) + ": vertex index " + std::to_string(raw[i]) + " out of range (" +
+                    vertex_count(nv) + ", 1-based)");
+    r.cells[i] = int(raw[i] - 1);
+  }
+  return r;
+}
+
+CellsRead read_gmsh_cells(const std::filesystem::path& path, int gmsh_type, int nodes) {
+  const std::string file = path.string();
+  const std::string data = io_detail::load_file(path);
+  TextCursor c(data, file);
+  std::string_view l;
+  std::vector<std::string_view> w;
+  auto expect_line = [&](const std::string& what) {
+    if (!c.next_line(l)) c.fail("truncated: unexpected end of file (expected " + what + ")");
+    io_detail::split_blanks(l, w);
+  };
+  expect_line("$MeshFormat");
+  if (l != "$MeshFormat") c.fail("not a Gmsh file (expected `$MeshFormat`, got `" + std::string(l) + "`)");
+  expect_line("version line");
+  double version;
+  long long filetype;
+  if (w.size() < 3 || !io_detail::parse_double(w[0], version) || !io_detail::parse_int(w[1], filetype))
+    c.fail("expected `version file-type data-size`");
+  if (filetype != 0) c.fail("binary .msh files are not supported (write ASCII)");
+  const bool v2 = version >= 2.0 && version < 3.0;
+  const bool v41 = version >= 4.1 && version < 5.0;
+  if (!v2 && !v41) c.fail("Gmsh format version " + std::string(w[0]) + " is not supported (use 2.2 or 4.1)");
+  expect_line("$EndMeshFormat");
+  if (l != "$EndMeshFormat") c.fail("expected $EndMeshFormat");
+
+  std::unordered_map<long long, int> node_index;
+  std::vector<double> xyz;
+  std::vector<long long> raw;      // node tags of kept elements
+  std::vector<int> raw_line;       // line of each kept element
+  std::map<long long, size_t> ignored;
+  bool have_nodes = false, have_elements = false;
+
+  auto add_node = [&](long long tag, std::string_view line_text) {
+    io_detail::split_blanks(line_text, w);
+    if (w.size() < 3) c.fail("expected node coordinates x y z");
+    double x[3];
+    for (int k = 0; k < 3; ++k) {
+      if (!io_detail::parse_double(w[k], x[k])) c.fail("expected a node coordinate, got `" + std::string(w[k]) + "`");
+      if (!std::isfinite(x[k])) c.fail("node " + std::to_string(tag) + " has a non-finite coordinate");
+    }
+    if (!node_index.emplace(tag, int(xyz.size() / 3)).second) c.fail("node tag " + std::to_string(tag) + " repeated");
+    xyz.insert(xyz.end(), x, x + 3);
+  };
+  // Element `tokens` = node tags of one element of `type`.
+  auto add_element = [&](long long type, const std::string_view* tags, size_t n) {
+    if (type != gmsh_type) {
+      ++ignored[type];
+      return;
+    }
+    if (n != size_t(nodes))
+      c.fail("element of type " + std::to_string(type) + " has " + std::to_string(n) + " nodes, expected " +
+             std::to_string(nodes));
+    for (size_t k = 0; k < n; ++k) {
+      long long t;
+      if (!io_detail::parse_int(tags[k], t)) c.fail("expected a node tag, got `" + std::string(tags[k]) + "`");
+      raw.push_back(t);
+    }
+    raw_line.push_back(c.line_no());
+  };
+
+  while (c.next_line(l)) {
+    if (l.empty() || l[0] != '$') c.fail("expected a section such as $Nodes, got `" + std::string(l) + "`");
+    const std::string name(l.substr(1));
+    if (name == "Nodes") {
+      if (v2) {
+        expect_line("number of nodes");
+        long long n = count_field(c, w, 0, "number of nodes");
+        for (long long i = 0; i < n; ++i) {
+          expect_line("node");
+          long long tag;
+          if (!io_detail::parse_int(w[0], tag)) c.fail("expected a node tag, got `" + std::string(w[0]) + "`");
+          add_node(tag, l.substr(size_t(w[0].data() + w[0].size() - l.data())));
+        }
+      } else {
+        expect_line("$Nodes header");
+        long long blocks = count_field(c, w, 0, "number of node blocks");
+        for (long long b = 0; b < blocks; ++b) {
+          expect_line("node block header");
+          long long count = count_field(c, w, 3, "number of nodes in block");
+          std::vector<long long> tags(static_cast<size_t>(count));
+          for (auto& t : tags) t = c.integer("node tag");
+          for (auto t : tags) {
+            expect_line("node coordinates");
+            add_node(t, l);
+          }
+        }
+      }
+      expect_line("$EndNodes");
+      if (l != "$EndNodes") c.fail("expected $EndNodes, got `" + std::string(l) + "` (wrong counts?)");
+      have_nodes = true;
+    } else if (name == "Elements") {
+      if (v2) {
+        expect_line("number of elements");
+        long long n = count_field(c, w, 0, "number of elements");
+        for (long long i = 0; i < n; ++i) {
+          expect_line("element");
+          long long type, ntags;
+          if (w.size() < 3 || !io_detail::parse_int(w[1], type) || !io_detail::parse_int(w[2], ntags) || ntags < 0 ||
+              w.size() < size_t(3 + ntags))
+            c.fail("expected `tag type ntags tags... nodes...`");
+          add_element(type, w.data() + 3 + ntags, w.size() - size_t(3 + ntags));
+        }
+      } else {
+        expect_line("$Elements header");
+        long long blocks = count_field(c, w, 0, "number of element blocks");
+        for (long long b = 0; b < blocks; ++b) {
+          expect_line("element block header");
+          long long type, count;
+          if (w.size() < 4 || !io_detail::parse_int(w[2], type) || !io_detail::parse_int(w[3], count) || count < 0)
+            c.fail("expected `entity-dim entity-tag element-type count`");
+          for (long long i = 0; i < count; ++i) {
+            expect_line("element");
+            add_element(type, w.data() + 1, w.size() - 1);
+          }
+        }
+      }
+      expect_line("$EndElements");
+      if (l != "$EndElements") c.fail("expected $EndElements, got `" + std::string(l) + "` (wrong counts?)");
+      have_elements = true;
+    } else {
+      const std::string end = "$End" + name;
+      bool closed = false;
+      while (c.next_line(l))
+        if (l == end) {
+          closed = true;
+          break;
+        }
+      if (!closed) c.fail("truncated: no " + end);
+    }
+  }
+  if (!have_nodes) throw IOError(file + ": no $Nodes section");
+  if (!have_elements) throw IOError(file + ": no $Elements section");
+  CellsRead r;
+  r.V = to_matrix(xyz);
+  r.cells.resize(raw.size());
+  for (size_t i = 0; i < raw.size(); ++i) {
+    auto it = node_index.find(raw[i]);
+    if (it == node_index.end())
+      throw IOError(file + ": line " + std::to_string(raw_line[i / nodes]) + ": element node tag " +
+                    std::to_string(raw[i]) + " is not a node (" + vertex_count(xyz.size() / 3) + ")");
+    r.cells[i] = it->second;
+  }
+  for (auto& [type, n] : ignored)
+    r.warnings.push_back(file + ": ignored " + plural(n, "element") + " of Gmsh type " + std::to_string(type) +
+                         " (only type " + std::to_string(gmsh_type) + " is read)");
+  return r;
+}
+
+void write_cell_mesh(const std::filesystem::path& path, const RowMatrixX3d& V, CellBlock cells, const CellKind& kind,
+                     const std::string& format, const CellData& cell_data) {
+  switch (choose_mesh_format(format, path)) {
+    case MeshFormat::VtkAscii: return write_vtk_cells(path, V, cells, kind.vtk_type, false, cell_data);
+    case MeshFormat::VtkBinary: return write_vtk_cells(path, V, cells, kind.vtk_type, true, cell_data);
+    case MeshFormat::Medit: return write_medit_cells(path, V, cells, kind.medit_section);
+    case MeshFormat::Gmsh: return write_gmsh_cells(path, V, cells, kind.gmsh_type);
+  }
+}
+
+CellsRead read_cell_mesh(const std::filesystem::path& path, const CellKind& kind) {
+  const std::string ext = io_detail::lower_extension(path);
+  if (ext == ".vtk") return read_vtk_cells(path, kind.vtk_type, kind.nodes);
+  if (ext == ".mesh") return read_medit_cells(path, kind.medit_section, kind.nodes);
+  if (ext == ".msh") return read_gmsh_cells(path, kind.gmsh_type, kind.nodes);
+  throw IOError(path.string() + ": unknown extension `" + ext + "` (expected .vtk, .mesh or .msh)");
+}
+
+}  // namespace polyhex
