@@ -1,0 +1,42 @@
+/// @file quality_json.h
+/// @brief The quality figures as the JSON object of `hexcheck.py --json` (same keys), used by the
+/// quality node's metrics and by `polyhex check`.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include "nodes/quality/quality.h"
+
+namespace polyhex {
+
+/// Keys: hexes, vertices, inverted, sj_min, sj_avg, sj_corner_min, sj_corner_avg, sj_below_0_2, volume,
+/// irregular_pct, irregular_interior_pct, irregular_boundary_pct, unused_vertices,
+/// faces_shared_by_more_than_two, nonmanifold_boundary_edges, boundary_quads, and when q.has_surface
+/// also bbox_diag, hausdorff_mean, hausdorff_max, volume_ratio. The per-hex vectors are not included.
+inline nlohmann::json to_json(const HexQuality& q) {
+  nlohmann::json j = {{"hexes", q.hexes},
+                      {"vertices", q.vertices},
+                      {"inverted", q.inverted},
+                      {"sj_min", q.sj_min},
+                      {"sj_avg", q.sj_avg},
+                      {"sj_corner_min", q.sj_corner_min},
+                      {"sj_corner_avg", q.sj_corner_avg},
+                      {"sj_below_0_2", q.sj_below_0_2},
+                      {"volume", q.volume},
+                      {"irregular_pct", q.irregular_pct},
+                      {"irregular_interior_pct", q.irregular_interior_pct},
+                      {"irregular_boundary_pct", q.irregular_boundary_pct},
+                      {"unused_vertices", q.unused_vertices},
+                      {"faces_shared_by_more_than_two", q.faces_shared_by_more_than_two},
+                      {"nonmanifold_boundary_edges", q.nonmanifold_boundary_edges},
+                      {"boundary_quads", q.boundary_quads}};
+  if (q.has_surface) {
+    j["bbox_diag"] = q.bbox_diag;
+    j["hausdorff_mean"] = q.hausdorff_mean;
+    j["hausdorff_max"] = q.hausdorff_max;
+    j["volume_ratio"] = q.volume_ratio;
+  }
+  return j;
+}
+
+}  // namespace polyhex

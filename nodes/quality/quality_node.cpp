@@ -1,0 +1,27 @@
+/// @file quality_node.cpp
+/// @brief Binding of the `quality` node: a sink that puts the figures of hex_quality into the report.
+#include "graph/node.h"
+#include "nodes/quality/quality.h"
+#include "nodes/quality/quality_json.h"
+
+namespace polyhex {
+namespace {
+
+const bool registered = register_node(make_node<QualityParams>(
+    "quality",
+    "quality of a hex mesh as ../shared/tools/hexcheck.py defines it (scaled Jacobian, irregular vertices, "
+    "inverted hexes; with the input surface also sampled Hausdorff distances and volume ratio)",
+    ParamSet<QualityParams>().add("samples", &QualityParams::samples,
+                                  "points sampled on each surface for the distances", 1, 1e8),
+    {{"mesh", artefact_name<HexMesh>()}, {"surface", artefact_name<SurfaceMesh>(), true}}, "",
+    [](const QualityParams& p, const Inputs& in, NodeContext& ctx) {
+      auto mesh = in.get<HexMesh>(0);
+      std::shared_ptr<const SurfaceMesh> surface = in.has(1) ? in.get<SurfaceMesh>(1) : nullptr;
+      const HexQuality q = hex_quality(*mesh, surface.get(), p);
+      ctx.metrics.update(to_json(q));
+      if (q.inverted > 0) ctx.warn(std::to_string(q.inverted) + " of " + std::to_string(q.hexes) + " hexes are inverted");
+      return Artefact{};
+    }));
+
+}  // namespace
+}  // namespace polyhex

@@ -1,0 +1,345 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+#include <set>
+
+#include "graph/node.h"
+#include "nodes/quality/quality.h"
+#include "nodes/quality/quality_json.h"
+#include "nodes/quality/triangle_tree.h"
+#include "tests/nodes/quality/hex_fixtures.h"
+
+using namespace polyhex;
+using namespace polyhex::test;
+using Catch::Matchers::Contains;
+
+namespace {
+
+// The unit cube's corners in VTK_HEXAHEDRON order.
+RowMatrixX3d cube_corners() {
+  RowMatrixX3d P(8, 3);
+  P << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1;
+  return P;
+}
+
+HexQuality measure(const HexMesh& m, const SurfaceMesh* s = nullptr, int samples = 20000) {
+  QualityParams p;
+  p.samples = samples;
+  return hex_quality(m, s, p);
+}
+
+}  // namespace
+
+TEST_CASE("quality: a unit cube hex is perfect but all its vertices are irregular", "[quality]") {
+  const HexQuality q = measure(unit_cube_hex());
+  CHECK(q.hexes == 1);
+  CHECK(q.vertices == 8);
+  CHECK(q.inverted == 0);
+  CHECK(q.sj_min == 1.0);
+  CHECK(q.sj_avg == 1.0);
+  CHECK(q.sj_corner_min == 1.0);
+  CHECK(q.sj_below_0_2 == 0);
+  CHECK(q.volume == Approx(1.0).epsilon(1e-15));
+  // hexcheck: a boundary vertex is irregular unless it has 4 boundary quads; a cube corner has 3.
+  CHECK(q.irregular_pct == 100.0);
+  CHECK(q.irregular_boundary_pct == 100.0);
+  CHECK(q.irregular_interior_pct == 0.0);  // no interior vertex: 0 / max(0, 1)
+  CHECK(q.boundary_quads == 6);
+  CHECK(q.nonmanifold_boundary_edges == 0);
+  CHECK(q.faces_shared_by_more_than_two == 0);
+  CHECK(q.unused_vertices == 0);
+  CHECK_FALSE(q.has_surface);
+  REQUIRE(q.sj.size() == 1);
+  CHECK(q.sj[0] == 1.0);
+}
+
+TEST_CASE("quality: a 3x3x3 grid has regular interior vertices, only its 8 corners are irregular", "[quality]") {
+  const HexQuality q = measure(grid_hex_mesh(3, 3, 3));
+  CHECK(q.hexes == 27);
+  CHECK(q.vertices == 64);
+  CHECK(q.sj_min == 1.0);
+  CHECK(q.sj_avg == 1.0);
+  CHECK(q.volume == Approx(27.0).epsilon(1e-14));
+  CHECK(q.irregular_interior_pct == 0.0);
+  CHECK(q.irregular_boundary_pct == Approx(100.0 * 8 / 56));
+  CHECK(q.irregular_pct == Approx(12.5));
+  CHECK(q.boundary_quads == 54);
+  CHECK(q.nonmanifold_boundary_edges == 0);
+  // The boundary quads face outward: their triangles enclose a positive volume of 27.
+  const SurfaceMesh b = boundary_surface(grid_hex_mesh(3, 3, 3));
+  double vol6 = 0;
+  for (Eigen::Index f = 0; f < b.F.rows(); ++f)
+    vol6 += b.V.row(b.F(f, 0)).dot(b.V.row(b.F(f, 1)).cross(b.V.row(b.F(f, 2))));
+  CHECK(vol6 / 6 == Approx(27.0));
+}
+
+TEST_CASE("quality: a sheared hex has scaled Jacobian 1/sqrt(1+t^2)", "[quality]") {
+  for (double t : {0.5, 1.0, 3.0}) {
+    RowMatrixX3d P = cube_corners();
+    P.bottomRows(4).col(0).array() += t;  // top face slides by t along x
+    const HexQuality q = measure(one_hex(P));
+    CHECK(q.sj_min == Approx(1.0 / std::sqrt(1 + t * t)).epsilon(1e-14));
+    CHECK(q.sj_corner_min == Approx(1.0 / std::sqrt(1 + t * t)).epsilon(1e-14));
+    CHECK(q.volume == Approx(1.0).epsilon(1e-14));  // shear keeps the volume
+    CHECK(q.inverted == 0);
+    CHECK(q.sj_below_0_2 == 0);
+  }
+  // t = 5: sj = 1/sqrt(26) < 0.2
+  RowMatrixX3d P = cube_corners();
+  P.bottomRows(4).col(0).array() += 5.0;
+  CHECK(measure(one_hex(P)).sj_below_0_2 == 1);
+}
+
+TEST_CASE("quality: the centre term counts when it is the minimum", "[quality]") {
+  // A distorted hex whose centre (principal axes) term is below every corner; values from hexcheck.py.
+  RowMatrixX3d P(8, 3);
+  P << -0.8, 0.1, 0.8, 1.2, 0.4, -0.5, 1.4, 0.7, 0.8, -0.6, 0.2, 0.5, -0.5, 0.7, 1.7, 0.4, 0.1, 0.4, 1.5, 0.7, 0.9,
+      -0.4, 0.7, 1.6;
+  std::array<Eigen::Vector3d, 8> p;
+  for (int k = 0; k < 8; ++k) p[k] = P.row(k).transpose();
+  const HexSJ s = hex_scaled_jacobian(p);
+  CHECK(s.sj == Approx(0.1348323878859992).epsilon(1e-12));
+  CHECK(s.corner_min == Approx(0.17107978455366013).epsilon(1e-12));
+  const Eigen::Vector3d xi = (p[1] + p[2] + p[5] + p[6]) - (p[0] + p[3] + p[4] + p[7]);
+  const Eigen::Vector3d eta = (p[2] + p[3] + p[6] + p[7]) - (p[0] + p[1] + p[4] + p[5]);
+  const Eigen::Vector3d zeta = (p[4] + p[5] + p[6] + p[7]) - (p[0] + p[1] + p[2] + p[3]);
+  CHECK(s.sj == Approx(xi.dot(eta.cross(zeta)) / (xi.norm() * eta.norm() * zeta.norm())).epsilon(1e-14));
+  const HexQuality q = measure(one_hex(P));
+  CHECK(q.sj_min == s.sj);
+  CHECK(q.sj_corner_min == s.corner_min);
+  CHECK(q.sj_below_0_2 == 1);
+  CHECK(q.inverted == 0);
+}
+
+TEST_CASE("quality: inverted hexes are counted and reported, not rejected", "[quality]") {
+  SECTION("top and bottom swapped: every corner is -1") {
+    RowMatrixX3d P = cube_corners();
+    RowMatrixX3d Q(8, 3);
+    Q.topRows(4) = P.bottomRows(4);
+    Q.bottomRows(4) = P.topRows(4);
+    const HexQuality q = measure(one_hex(Q));
+    CHECK(q.inverted == 1);
+    CHECK(q.sj_min == -1.0);
+    CHECK(q.sj_corner_min == -1.0);
+    CHECK(q.volume == Approx(-1.0));
+    CHECK(q.sj_below_0_2 == 1);
+  }
+  SECTION("one corner pushed through the opposite one") {
+    RowMatrixX3d P = cube_corners();
+    P.row(6) << 0.3, 0.3, 0.3;
+    const HexQuality q = measure(one_hex(P));
+    CHECK(q.inverted == 1);
+    CHECK(q.sj_corner_min < 0);
+    CHECK(q.sj_min <= q.sj_corner_min);
+  }
+  SECTION("one inverted hex among good ones") {
+    HexMesh g = grid_hex_mesh(3, 3, 3);
+    g.V.row(21) << 2.2, 2.2, 2.2;  // interior vertex (1,1,1) pushed past (2,2,2)
+    const HexQuality q = measure(g);
+    CHECK(q.inverted >= 1);
+    CHECK(q.inverted < 27);
+    CHECK(q.sj_corner_min < 0);
+  }
+}
+
+TEST_CASE("quality: a degenerate hex has scaled Jacobian 0, never 1", "[quality]") {
+  SECTION("collapsed edge") {
+    RowMatrixX3d P = cube_corners();
+    P.row(1) = P.row(0);
+    const HexQuality q = measure(one_hex(P));
+    CHECK(q.sj_min == 0.0);
+    CHECK(q.sj_corner_min == 0.0);
+    CHECK(q.inverted == 1);  // corner min <= 0
+  }
+  SECTION("all corners at one point") {
+    RowMatrixX3d P = RowMatrixX3d::Constant(8, 3, 0.5);
+    std::array<Eigen::Vector3d, 8> p;
+    for (auto& x : p) x = Eigen::Vector3d::Constant(0.5);
+    const HexSJ s = hex_scaled_jacobian(p);
+    CHECK(s.sj == 0.0);
+    CHECK(s.corner_min == 0.0);
+    CHECK(measure(one_hex(P)).sj_avg == 0.0);
+  }
+  SECTION("flattened hex (zero height)") {
+    RowMatrixX3d P = cube_corners();
+    P.bottomRows(4).col(2).setZero();
+    const HexQuality q = measure(one_hex(P));
+    CHECK(q.sj_min == 0.0);
+    CHECK(q.volume == 0.0);
+  }
+}
+
+TEST_CASE("quality: topology counts on a broken mesh", "[quality]") {
+  HexMesh m = grid_hex_mesh(2, 1, 1);
+  // add an unused vertex and the first hex twice more: its faces are then used 3 or 4 times
+  m.V.conservativeResize(m.V.rows() + 1, 3);
+  m.V.row(m.V.rows() - 1) << 10, 10, 10;
+  m.H.conservativeResize(4, 8);
+  m.H.row(2) = m.H.row(0);
+  m.H.row(3) = m.H.row(0);
+  const HexQuality q = measure(m);
+  CHECK(q.unused_vertices == 1);
+  CHECK(q.vertices == 13);
+  CHECK(q.faces_shared_by_more_than_two == 6);  // all 6 faces of hex 0 (the shared one is used 4 times)
+  CHECK(q.boundary_quads == 5);                 // the faces of hex 1 but the shared one
+  CHECK(q.nonmanifold_boundary_edges == 4);     // the rim of the open box
+}
+
+TEST_CASE("quality: Hausdorff of a grid against its own boundary is 0, volume ratio 1", "[quality]") {
+  const HexMesh g = grid_hex_mesh(3, 3, 3);
+  const SurfaceMesh s = boundary_surface(g);
+  const HexQuality q = measure(g, &s);
+  REQUIRE(q.has_surface);
+  CHECK(q.bbox_diag == Approx(3 * std::sqrt(3.0)));
+  CHECK(q.hausdorff_max < 1e-12);
+  CHECK(q.hausdorff_mean < 1e-12);
+  CHECK(q.volume_ratio == Approx(1.0).epsilon(1e-14));
+  const json j = to_json(q);
+  CHECK(j.at("hausdorff_max").get<double>() == q.hausdorff_max);
+  CHECK(j.size() == 20);
+}
+
+TEST_CASE("quality: Hausdorff against a shifted surface", "[quality]") {
+  const double s = 0.3, diag = 3 * std::sqrt(3.0);
+  const HexMesh g = grid_hex_mesh(3, 3, 3);
+  SurfaceMesh shifted = boundary_surface(g);
+  shifted.V.col(0).array() += s;
+  const HexQuality q = measure(g, &shifted, 100000);
+  // Max: points on the face x = 0 are exactly s from the shifted face x = s, nothing is farther.
+  CHECK(q.hausdorff_max == Approx(s / diag).epsilon(1e-12));
+  // Mean (both directions alike): face x=0 contributes s, face x=3 E[min(s, dist to square rim)],
+  // the 4 side faces s^2/6 each, over the total area 54.
+  const double rim = s - 2 * s * s / 3 + 4 * s * s * s / 27;
+  const double mean = (9 * s + 9 * rim + 4 * 9 * s * s / 6) / 54;
+  CHECK(q.hausdorff_mean == Approx(mean / diag).epsilon(0.01));
+  CHECK(q.volume_ratio == Approx(1.0));
+}
+
+TEST_CASE("quality: the figures do not depend on the thread count or the run", "[quality]") {
+  HexMesh g = grid_hex_mesh(6, 5, 4);
+  perturb(g.V, 0.2, 7);
+  SurfaceMesh s = boundary_surface(grid_hex_mesh(6, 5, 4));
+  const json a = to_json(measure(g, &s, 5000)), b = to_json(measure(g, &s, 5000));
+  CHECK(a == b);
+}
+
+TEST_CASE("quality: invalid meshes are rejected with the reason", "[quality]") {
+  HexMesh m = unit_cube_hex();
+  SECTION("no hexes") {
+    m.H.resize(0, 8);
+    CHECK_THROWS_MATCHES(measure(m), InvalidInput, Catch::Message("grid: no hexahedra"));
+  }
+  SECTION("index out of range") {
+    m.H(0, 5) = 8;
+    CHECK_THROWS_MATCHES(measure(m), InvalidInput,
+                         Catch::Message("grid: hex 0: vertex index 8 out of range (8 vertices)"));
+  }
+  SECTION("NaN coordinate") {
+    m.V(3, 1) = std::nan("");
+    CHECK_THROWS_MATCHES(measure(m), InvalidInput, Catch::Message("grid: vertex 3 has a non-finite coordinate"));
+  }
+  SECTION("samples < 1") {
+    QualityParams p;
+    p.samples = 0;
+    CHECK_THROWS_MATCHES(hex_quality(m, nullptr, p), InvalidInput,
+                         Catch::Message("quality: samples = 0 must be >= 1"));
+  }
+  SECTION("surface index out of range") {
+    SurfaceMesh s = boundary_surface(m);
+    s.source = "cube.obj";
+    s.F(2, 1) = 99;
+    CHECK_THROWS_MATCHES(measure(m, &s), InvalidInput,
+                         Catch::Message("cube.obj: triangle 2: vertex index 99 out of range (8 vertices)"));
+  }
+  SECTION("surface without triangles") {
+    SurfaceMesh s;
+    s.V = m.V;
+    s.source = "empty.obj";
+    CHECK_THROWS_MATCHES(measure(m, &s), InvalidInput, Catch::Message("empty.obj: no triangles"));
+  }
+  SECTION("flat open surface") {
+    SurfaceMesh s;
+    s.V.resize(4, 3);
+    s.V << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0;
+    s.F.resize(2, 3);
+    s.F << 0, 1, 2, 0, 2, 3;
+    s.source = "square.obj";
+    CHECK_THROWS_MATCHES(measure(m, &s), InvalidInput, Catch::Message("square.obj: the surface encloses no volume"));
+  }
+}
+
+TEST_CASE("quality: the triangle tree finds the exact closest point", "[quality]") {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  RowMatrixX3d V(300, 3);
+  for (Eigen::Index i = 0; i < V.size(); ++i) V.data()[i] = u(rng);
+  RowMatrixX3i F(100, 3);
+  for (int f = 0; f < 100; ++f) F.row(f) << 3 * f, 3 * f + 1, 3 * f + 2;
+  V.row(3 * 7 + 1) = V.row(3 * 7);                      // triangle 7: a zero-length edge
+  V.row(3 * 9 + 2) = 0.5 * (V.row(3 * 9) + V.row(3 * 9 + 1));  // triangle 9: collinear corners
+  const TriangleTree tree(V, F);
+  for (int k = 0; k < 500; ++k) {
+    const Eigen::Vector3d p(2 * u(rng), 2 * u(rng), 2 * u(rng));
+    double best = INFINITY;
+    for (int f = 0; f < 100; ++f)
+      best = std::min(best, (closest_point_on_triangle(p, V.row(F(f, 0)), V.row(F(f, 1)), V.row(F(f, 2))) - p).norm());
+    const auto hit = tree.closest(p);
+    CHECK(std::sqrt(hit.sq_distance) == best);
+    CHECK((hit.point - p).norm() == Approx(best));
+  }
+  // Degenerate triangles: the closest point of a segment.
+  const Eigen::Vector3d a(0, 0, 0), b(2, 0, 0);
+  CHECK((closest_point_on_triangle(Eigen::Vector3d(1, 1, 0), a, b, Eigen::Vector3d(1, 0, 0)) -
+         Eigen::Vector3d(1, 0, 0)).norm() < 1e-15);
+  CHECK((closest_point_on_triangle(Eigen::Vector3d(3, 1, 0), a, a, b) - b).norm() < 1e-15);
+  CHECK_THROWS_MATCHES(TriangleTree(V, RowMatrixX3i(0, 3)), InvalidInput,
+                       Catch::Message("triangle tree: no triangles"));
+}
+
+TEST_CASE("quality node: a sink with hexcheck's keys as metrics", "[quality]") {
+  const NodeSpec* spec = Registry::instance().find("quality");
+  REQUIRE(spec != nullptr);
+  CHECK(spec->output.empty());
+  REQUIRE(spec->inputs.size() == 2);
+  CHECK(spec->inputs[0].name == "mesh");
+  CHECK(spec->inputs[0].artefact_type == "HexMesh");
+  CHECK_FALSE(spec->inputs[0].optional);
+  CHECK(spec->inputs[1].name == "surface");
+  CHECK(spec->inputs[1].artefact_type == "SurfaceMesh");
+  CHECK(spec->inputs[1].optional);
+  CHECK_THROWS_MATCHES(spec->check_params(json{{"samples", 0}}, "q"), ConfigError,
+                       Catch::Message("q: param `samples` = 0 is out of range [1.0, 100000000.0]"));
+
+  const HexMesh g = grid_hex_mesh(3, 3, 3);
+  SECTION("without a surface") {
+    NodeContext ctx;
+    ctx.id = "q";
+    Inputs in;
+    in.items = {make_artefact(HexMesh(g)), Artefact{}};
+    const Artefact out = spec->run(spec->check_params(json::object(), "q"), in, ctx);
+    CHECK_FALSE(out);
+    std::set<std::string> keys;
+    for (auto& [k, v] : ctx.metrics.items()) keys.insert(k);
+    CHECK(keys == std::set<std::string>{"hexes", "vertices", "inverted", "sj_min", "sj_avg", "sj_corner_min",
+                                        "sj_corner_avg", "sj_below_0_2", "volume", "irregular_pct",
+                                        "irregular_interior_pct", "irregular_boundary_pct", "unused_vertices",
+                                        "faces_shared_by_more_than_two", "nonmanifold_boundary_edges",
+                                        "boundary_quads"});
+    CHECK(ctx.metrics["hexes"] == 27);
+    CHECK(ctx.warnings.empty());
+  }
+  SECTION("with a surface and an inverted hex") {
+    HexMesh bad = g;
+    bad.V.row(21) << 2.2, 2.2, 2.2;
+    NodeContext ctx;
+    Inputs in;
+    in.items = {make_artefact(std::move(bad)), make_artefact(boundary_surface(g))};
+    spec->run(json{{"samples", 1000}}, in, ctx);
+    CHECK(ctx.metrics.contains("hausdorff_max"));
+    CHECK(ctx.metrics.contains("volume_ratio"));
+    CHECK(ctx.metrics["inverted"].get<long>() >= 1);
+    REQUIRE(ctx.warnings.size() == 1);
+    CHECK_THAT(ctx.warnings[0], Contains("of 27 hexes are inverted"));
+  }
+}
