@@ -5,7 +5,11 @@
 //   polyhex graph CONFIG [--input FILE]          (Graphviz DOT on stdout)
 //   polyhex nodes [--json]                        (registered node types and their params)
 //
-// Exit codes: 0 success, 1 a node failed (report.json says which), 2 bad command line or config.
+//   polyhex check MESH [--surface SURF] [--json]   (the quality node alone; exit 3 if a hex is inverted)
+//   polyhex shapes NAME --out FILE                 (a built-in closed surface)
+//
+// Exit codes: 0 success, 1 a node failed (report.json says which), 2 bad command line or config,
+// 3 the result has inverted hexes.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -37,7 +41,19 @@ int cmd_run(const RunRequest& req) {
     return 1;
   }
   std::fprintf(stderr, "polyhex: done in %.2f s; report: %s\n", r.seconds, (req.out_dir / "report.json").c_str());
-  return 0;
+  // A mesh a solver would reject is not a success: the final optimization or the quality report saw
+  // inverted hexes.
+  int code = 0;
+  for (const NodeRecord& n : r.nodes) {
+    std::string stage = n.type.substr(0, n.type.find('/'));
+    if ((stage == "quality" || stage == "optimize") && n.metrics.contains("inverted") && n.metrics["inverted"].is_number() &&
+        n.metrics["inverted"].get<double>() > 0) {
+      std::fprintf(stderr, "polyhex: node `%s` (`%s`) reports %s inverted hexes\n", n.id.c_str(), n.type.c_str(),
+                   n.metrics["inverted"].dump().c_str());
+      code = 3;
+    }
+  }
+  return code;
 }
 
 int cmd_bench(RunRequest req, int repeat, const std::string& json_path) {

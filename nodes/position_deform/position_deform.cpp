@@ -1,0 +1,464 @@
+#include "nodes/position_deform/position_deform.h"
+
+#include <Eigen/Dense>
+#include <Eigen/SparseLU>
+#include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <queue>
+
+#include "runtime/errors.h"
+#include "runtime/factorization.h"
+
+namespace polyhex {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+struct UnionFind {
+  std::vector<int> p;
+  explicit UnionFind(int n) : p(n) { std::iota(p.begin(), p.end(), 0); }
+  int find(int x) { return p[x] == x ? x : p[x] = find(p[x]); }
+  bool unite(int a, int b) {
+    a = find(a), b = find(b);
+    if (a == b) return false;
+    p[std::max(a, b)] = std::min(a, b);
+    return true;
+  }
+};
+
+/// Unique undirected tet edges as (i, j), i < j.
+std::vector<std::pair<int, int>> tet_edges(const RowMatrixX4i& T) {
+  std::vector<uint64_t> keys;
+  keys.reserve(size_t(T.rows()) * 6);
+  static const int E[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+  for (Eigen::Index t = 0; t < T.rows(); ++t)
+    for (auto& e : E) {
+      uint64_t a = uint32_t(T(t, e[0])), b = uint32_t(T(t, e[1]));
+      if (a > b) std::swap(a, b);
+      keys.push_back(a << 32 | b);
+    }
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  std::vector<std::pair<int, int>> out(keys.size());
+  for (size_t k = 0; k < keys.size(); ++k) out[k] = {int(keys[k] >> 32), int(keys[k] & 0xffffffffu)};
+  return out;
+}
+
+/// Adjacency lists (CSR) of the edge graph.
+struct Graph {
+  std::vector<int> start, nbr;
+  Graph(int n, const std::vector<std::pair<int, int>>& edges) : start(n + 1, 0), nbr(edges.size() * 2) {
+    for (auto& [a, b] : edges) ++start[a + 1], ++start[b + 1];
+    for (int i = 0; i < n; ++i) start[i + 1] += start[i];
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (auto& [a, b] : edges) nbr[fill[a]++] = b, nbr[fill[b]++] = a;
+  }
+};
+
+/// An ordering requirement between two same-axis chart groups: sign * (k_q - k_p) >= 1.
+struct OrderedPair {
+  int p, q;
+  int sign;
+};
+
+/// Mean value coordinates of point x w.r.t. the triangle (p1,p2,p3) of a closed star polyhedron around x
+/// (Ju, Schaefer, Warren 2005, as used by [FKR05] for the 3D Laplacian). Adds to w[0..2].
+void mvc_triangle(const Eigen::Vector3d& x, const Eigen::Vector3d* p, double* w) {
+  Eigen::Vector3d u[3];
+  double d[3];
+  for (int i = 0; i < 3; ++i) {
+    d[i] = (p[i] - x).norm();
+    if (d[i] < 1e-300) return;
+    u[i] = (p[i] - x) / d[i];
+  }
+  double theta[3], c[3], s[3];
+  for (int i = 0; i < 3; ++i) {
+    double l = (u[(i + 1) % 3] - u[(i + 2) % 3]).norm();
+    theta[i] = 2.0 * std::asin(std::min(1.0, l / 2.0));
+  }
+  double h = (theta[0] + theta[1] + theta[2]) / 2.0;
+  if (M_PI - h < 1e-12) return;  // x on the triangle: cannot happen for an interior vertex of a valid star
+  double det = u[0].dot(u[1].cross(u[2]));
+  double sg = det < 0 ? -1.0 : 1.0;
+  for (int i = 0; i < 3; ++i) {
+    double den = std::sin(theta[(i + 1) % 3]) * std::sin(theta[(i + 2) % 3]);
+    if (std::abs(den) < 1e-300) return;
+    c[i] = 2.0 * std::sin(h) * std::sin(h - theta[i]) / den - 1.0;
+    c[i] = std::clamp(c[i], -1.0, 1.0);
+    s[i] = sg * std::sqrt(1.0 - c[i] * c[i]);
+    if (std::abs(s[i]) < 1e-12) return;  // x in the plane of the triangle, outside it: no contribution
+  }
+  for (int i = 0; i < 3; ++i) {
+    int ip = (i + 1) % 3, im = (i + 2) % 3;
+    w[i] += (theta[i] - c[ip] * theta[im] - c[im] * theta[ip]) / (d[i] * std::sin(theta[ip]) * s[im]);
+  }
+}
+
+}  // namespace
+
+double conformal_distortion(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                            const Eigen::Vector3d& d, const Eigen::Vector3d& A, const Eigen::Vector3d& B,
+                            const Eigen::Vector3d& C, const Eigen::Vector3d& D) {
+  Eigen::Matrix3d E0, E1;
+  E0 << b - a, c - a, d - a;
+  E1 << B - A, C - A, D - A;
+  double d0 = E0.determinant(), d1 = E1.determinant();
+  if (!(d0 > 0) || !(d1 > 0)) return std::numeric_limits<double>::infinity();
+  Eigen::Matrix3d J = E1 * E0.inverse();
+  return J.norm() * J.inverse().norm() / 3.0;
+}
+
+PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetMesh& deformed,
+                            std::shared_ptr<const PolyCubeSegmentation> seg_ptr, const PositionDeformParams& p,
+                            PositionDeformStats* stats_out) {
+  const TetMesh& input = *input_ptr;
+  const PolyCubeSegmentation& seg = *seg_ptr;
+  const int nV = int(input.V.rows());
+  if (deformed.V.rows() != nV || deformed.T.rows() != input.T.rows())
+    throw InvalidInput(input.source + ": the deformed mesh has " + std::to_string(deformed.V.rows()) +
+                       " vertices, the input " + std::to_string(nV) + ": they must share connectivity");
+  if (p.final_solve != "mvc_laplace" && p.final_solve != "poisson")
+    throw ConfigError("final_solve = \"" + p.final_solve + "\" is not one of: mvc_laplace, poisson");
+  const int nC = int(seg.charts.size());
+  if (seg.chart.size() != seg.F.rows()) throw InvalidInput(input.source + ": segmentation has no chart per triangle");
+  for (Eigen::Index f = 0; f < seg.F.rows(); ++f) {
+    if (seg.chart[f] < 0 || seg.chart[f] >= nC) throw InvalidInput(input.source + ": triangle " + std::to_string(f) + " has chart id out of range");
+    for (int k = 0; k < 3; ++k)
+      if (seg.F(f, k) < 0 || seg.F(f, k) >= nV) throw InvalidInput(input.source + ": segmentation triangle index out of range");
+  }
+  PositionDeformStats st;
+  st.charts = nC;
+  const RowMatrixX3d& Vd = deformed.V;
+  const double diag = (input.V.colwise().maxCoeff() - input.V.colwise().minCoeff()).norm();
+  const double h = p.edge_length * diag;
+  const double min_d = 2.0 * h, sigma = 3.0 * min_d;
+
+  auto edges = tet_edges(input.T);
+  Graph graph(nV, edges);
+
+  // Charts of every vertex (boundary vertices only have any).
+  std::vector<std::vector<int>> vcharts(nV);
+  for (Eigen::Index f = 0; f < seg.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      auto& v = vcharts[seg.F(f, k)];
+      int c = seg.chart[f];
+      if (std::find(v.begin(), v.end(), c) == v.end()) v.push_back(c);
+    }
+  std::vector<int> chart_vertices(nC, 0);
+  for (int v = 0; v < nV; ++v)
+    for (int c : vcharts[v]) ++chart_vertices[c];
+
+  PolyCubeMap out;
+  out.input = input_ptr;
+  out.segmentation = seg_ptr;
+  out.edge_length = h;
+  out.U.resize(nV, 3);
+  out.chart_plane = Eigen::VectorXi::Zero(nC);
+
+  // Surface MVC weights (2D, per incident triangle: tan(angle/2) / length), on the deformed surface.
+  std::vector<std::map<int, double>> surf_w;
+  if (p.final_solve == "mvc_laplace") {
+    surf_w.resize(nV);
+    for (Eigen::Index f = 0; f < seg.F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        int i = seg.F(f, k), j = seg.F(f, (k + 1) % 3), l = seg.F(f, (k + 2) % 3);
+        Eigen::Vector3d a = Vd.row(j) - Vd.row(i), b = Vd.row(l) - Vd.row(i);
+        double la = a.norm(), lb = b.norm();
+        if (la < 1e-300 || lb < 1e-300) continue;
+        double ang = std::acos(std::clamp(a.dot(b) / (la * lb), -1.0, 1.0));
+        double t = std::tan(ang / 2.0);
+        surf_w[i][j] += t / la;
+        surf_w[i][l] += t / lb;
+      }
+  }
+  std::vector<char> on_boundary(nV, 0);
+  for (Eigen::Index f = 0; f < seg.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) on_boundary[seg.F(f, k)] = 1;
+
+  // Volume MVC weights (3D) of interior vertices, on the deformed mesh: rows of (i, j, w).
+  std::vector<std::vector<std::pair<int, double>>> vol_w;
+  if (p.final_solve == "mvc_laplace") {
+    std::vector<std::vector<int>> vt(nV);
+    for (Eigen::Index t = 0; t < input.T.rows(); ++t)
+      for (int k = 0; k < 4; ++k) vt[input.T(t, k)].push_back(int(t));
+    vol_w.resize(nV);
+    static const int opp[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+    oneapi::tbb::parallel_for(0, nV, [&](int i) {
+      if (on_boundary[i]) return;
+      std::map<int, double> w;
+      Eigen::Vector3d x = Vd.row(i).transpose();
+      for (int t : vt[i]) {
+        int k = 0;
+        while (input.T(t, k) != i) ++k;
+        Eigen::Vector3d P[3];
+        int id[3];
+        for (int m = 0; m < 3; ++m) {
+          id[m] = input.T(t, opp[k][m]);
+          P[m] = Vd.row(id[m]).transpose();
+        }
+        double ww[3] = {0, 0, 0};
+        mvc_triangle(x, P, ww);
+        for (int m = 0; m < 3; ++m) w[id[m]] += ww[m];
+      }
+      vol_w[i].assign(w.begin(), w.end());
+    });
+  }
+
+  for (int a = 0; a < 3; ++a) {
+    // Same-axis charts sharing a vertex are forced onto one plane (groups).
+    std::vector<int> axis_charts;
+    for (int c = 0; c < nC; ++c)
+      if (label_axis(seg.charts[c].label) == a) axis_charts.push_back(c);
+    if (axis_charts.empty())
+      throw InvalidInput(input.source + ": the PolyCube structure has no chart on axis " + std::string(1, char('X' + a)));
+    UnionFind uf(nC);
+    std::vector<int> vgroup(nV, -1);  // representative a-chart of a vertex, -1 if none
+    for (int v = 0; v < nV; ++v)
+      for (int c : vcharts[v])
+        if (label_axis(seg.charts[c].label) == a) {
+          if (vgroup[v] >= 0 && uf.unite(vgroup[v], c)) ++st.merged_same_axis_charts;
+          vgroup[v] = c;
+        }
+    std::vector<int> group_index(nC, -1);
+    int nG = 0;
+    for (int c : axis_charts)
+      if (uf.find(c) == c) group_index[c] = nG++;
+    std::vector<int> chart_group(nC, -1);
+    for (int c : axis_charts) chart_group[c] = group_index[uf.find(c)];
+    for (int v = 0; v < nV; ++v)
+      if (vgroup[v] >= 0) vgroup[v] = chart_group[vgroup[v]];
+    std::vector<int> group_size(nG, 0);
+    std::vector<double> group_mean(nG, 0.0);
+    for (int v = 0; v < nV; ++v)
+      if (vgroup[v] >= 0) ++group_size[vgroup[v]], group_mean[vgroup[v]] += Vd(v, a);
+    for (int g = 0; g < nG; ++g) group_mean[g] /= std::max(1, group_size[g]);
+
+    // §5.2 approximate Voronoi partition of the volume by a-chart group (multi-source Dijkstra).
+    std::vector<double> dist(nV, std::numeric_limits<double>::infinity());
+    std::vector<int> src(nV, -1);
+    using QE = std::pair<double, int>;
+    std::priority_queue<QE, std::vector<QE>, std::greater<QE>> pq;
+    for (int v = 0; v < nV; ++v)
+      if (vgroup[v] >= 0) dist[v] = 0, src[v] = v, pq.push({0.0, v});
+    while (!pq.empty()) {
+      auto [dv, v] = pq.top();
+      pq.pop();
+      if (dv > dist[v]) continue;
+      for (int k = graph.start[v]; k < graph.start[v + 1]; ++k) {
+        int u = graph.nbr[k];
+        double du = dv + (Vd.row(u) - Vd.row(v)).norm();
+        if (du < dist[u]) dist[u] = du, src[u] = src[v], pq.push({du, u});
+      }
+    }
+    std::map<std::pair<int, int>, std::pair<double, int>> samples;  // (p<q) -> (sum δ, count)
+    for (auto& [i, j] : edges) {
+      if (src[i] < 0 || src[j] < 0) continue;
+      int gi = vgroup[src[i]], gj = vgroup[src[j]];
+      if (gi == gj) continue;
+      double delta = Vd(src[j], a) - Vd(src[i], a);
+      if (gi > gj) std::swap(gi, gj), delta = -delta;
+      auto& s = samples[{gi, gj}];
+      s.first += delta;
+      s.second += 1;
+    }
+    struct DistancePair {
+      int p, q;
+      double delta, w;
+    };
+    std::vector<DistancePair> dpairs;
+    std::vector<OrderedPair> ordered;
+    for (auto& [key, s] : samples) {
+      double delta = s.first / s.second;
+      double excess = std::max(std::abs(delta) - min_d, 0.0);
+      double w = p.distance_weight * std::min(group_size[key.first], group_size[key.second]) *
+                 std::exp(-excess * excess / (sigma * sigma));
+      if (w > 0) dpairs.push_back({key.first, key.second, delta, w});
+      if (std::abs(delta) > 0.5 * h) ordered.push_back({key.first, key.second, delta > 0 ? 1 : -1});
+    }
+    st.distance_pairs += int(dpairs.size());
+    // Bridged pairs: two a-groups bordering one chart of another axis are its two ends along a.
+    for (int b = 0; b < nC; ++b) {
+      if (label_axis(seg.charts[b].label) == a) continue;
+      std::vector<int> gs;
+      for (int c : seg.charts[b].neighbours)
+        if (chart_group[c] >= 0) gs.push_back(chart_group[c]);
+      std::sort(gs.begin(), gs.end());
+      gs.erase(std::unique(gs.begin(), gs.end()), gs.end());
+      for (size_t x = 0; x < gs.size(); ++x)
+        for (size_t y = x + 1; y < gs.size(); ++y) {
+          double diff = group_mean[gs[y]] - group_mean[gs[x]];
+          if (std::abs(diff) > 0.5 * h) ordered.push_back({gs[x], gs[y], diff > 0 ? 1 : -1});
+        }
+    }
+    std::sort(ordered.begin(), ordered.end(), [](auto& x, auto& y) { return std::tie(x.p, x.q) < std::tie(y.p, y.q); });
+    ordered.erase(std::unique(ordered.begin(), ordered.end(), [](auto& x, auto& y) { return x.p == y.p && x.q == y.q; }),
+                  ordered.end());
+    st.ordered_pairs += int(ordered.size());
+
+    // Poisson step: unknowns = free vertices, then groups.
+    auto t0 = Clock::now();
+    std::vector<int> var(nV);
+    int nFree = 0;
+    for (int v = 0; v < nV; ++v) var[v] = vgroup[v] < 0 ? nFree++ : -1;
+    for (int v = 0; v < nV; ++v)
+      if (vgroup[v] >= 0) var[v] = nFree + vgroup[v];
+    const int n = nFree + nG;
+    std::vector<Eigen::Triplet<double>> trip;
+    trip.reserve(edges.size() * 3 + dpairs.size() * 3 + n);
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
+    auto add_term = [&](int x, int y, double w, double target) {  // w ((y_y - y_x) - target)^2
+      trip.emplace_back(x, x, w);
+      trip.emplace_back(y, y, w);
+      trip.emplace_back(std::max(x, y), std::min(x, y), -w);
+      rhs[x] -= w * target;
+      rhs[y] += w * target;
+    };
+    for (auto& [i, j] : edges)
+      if (var[i] != var[j]) add_term(var[i], var[j], 1.0, Vd(j, a) - Vd(i, a));
+    for (auto& d : dpairs) add_term(nFree + d.p, nFree + d.q, d.w, d.delta);
+    // Tiny pull towards the deformed coordinates removes the translation null space.
+    const double eps = 1e-8;
+    for (int v = 0; v < nV; ++v)
+      if (vgroup[v] < 0) trip.emplace_back(var[v], var[v], eps), rhs[var[v]] += eps * Vd(v, a);
+    for (int g = 0; g < nG; ++g) trip.emplace_back(nFree + g, nFree + g, eps * group_size[g]), rhs[nFree + g] += eps * group_size[g] * group_mean[g];
+    Eigen::SparseMatrix<double> A(n, n);
+    A.setFromTriplets(trip.begin(), trip.end());
+    CholmodFactorization chol(A);
+    Eigen::VectorXd y = chol.solve(rhs);
+    st.seconds_poisson += since(t0);
+
+    // Rounding to the lattice, keeping ordered pairs apart (§5.2).
+    std::vector<double> c(nG);
+    std::vector<long> k(nG);
+    for (int g = 0; g < nG; ++g) c[g] = y[nFree + g], k[g] = std::lround(c[g] / h);
+    for (auto& o : ordered)
+      if (o.sign * (c[o.q] - c[o.p]) <= 0) ++st.flipped_chart_orders;
+    for (int pass = 0; pass < 10000; ++pass) {
+      bool changed = false;
+      for (auto& o : ordered) {
+        long gap = o.sign * (k[o.q] - k[o.p]);
+        if (gap >= 1) continue;
+        // move the smaller group away by the missing amount
+        long need = 1 - gap;
+        if (group_size[o.q] <= group_size[o.p]) k[o.q] += o.sign * need;
+        else k[o.p] -= o.sign * need;
+        changed = true;
+      }
+      if (!changed) break;
+    }
+    for (auto& o : ordered)
+      if (o.sign * (k[o.q] - k[o.p]) < 1) ++st.flipped_after_rounding;
+    for (int g = 0; g < nG; ++g)
+      st.chart_coordinates_rounded_max_shift = std::max(st.chart_coordinates_rounded_max_shift, std::abs(c[g] - k[g] * h) / h);
+    for (int ch : axis_charts) out.chart_plane[ch] = int(k[chart_group[ch]]);
+
+    // Final solve with the chart planes pinned.
+    t0 = Clock::now();
+    Eigen::VectorXd u(nV);
+    for (int v = 0; v < nV; ++v)
+      if (vgroup[v] >= 0) u[v] = k[vgroup[v]] * h;
+    if (nFree > 0) {
+      if (p.final_solve == "poisson") {
+        // The same energy restricted to the free unknowns: the upper-left block of A, with the pinned
+        // groups moved to the right-hand side.
+        std::vector<Eigen::Triplet<double>> tf;
+        Eigen::VectorXd b = rhs.head(nFree);
+        for (int col = 0; col < A.outerSize(); ++col)
+          for (Eigen::SparseMatrix<double>::InnerIterator it(A, col); it; ++it) {
+            int r = int(it.row()), cc = int(it.col());
+            if (r < nFree && cc < nFree) tf.emplace_back(r, cc, it.value());
+            else if (r >= nFree && cc < nFree) b[cc] -= it.value() * k[r - nFree] * h;
+            else if (cc >= nFree && r < nFree) b[r] -= it.value() * k[cc - nFree] * h;
+          }
+        Eigen::SparseMatrix<double> Af(nFree, nFree);
+        Af.setFromTriplets(tf.begin(), tf.end());
+        CholmodFactorization cf(Af);
+        Eigen::VectorXd yf = cf.solve(b);
+        for (int v = 0; v < nV; ++v)
+          if (vgroup[v] < 0) u[v] = yf[var[v]];
+      } else {
+        std::vector<Eigen::Triplet<double>> tf;
+        Eigen::VectorXd b = Eigen::VectorXd::Zero(nFree);
+        for (int v = 0; v < nV; ++v) {
+          if (vgroup[v] >= 0) continue;
+          int r = var[v];
+          double sum = 0;
+          auto add = [&](int j, double w) {
+            sum += w;
+            if (vgroup[j] >= 0) b[r] += w * u[j];
+            else tf.emplace_back(r, var[j], -w);
+          };
+          if (on_boundary[v])
+            for (auto& [j, w] : surf_w[v]) add(j, w);
+          else
+            for (auto& [j, w] : vol_w[v]) add(j, w);
+          if (std::abs(sum) < 1e-300)
+            throw SolverError(input.source + ": vertex " + std::to_string(v) + " has zero mean value weights");
+          tf.emplace_back(r, r, sum);
+        }
+        Eigen::SparseMatrix<double> Af(nFree, nFree);
+        Af.setFromTriplets(tf.begin(), tf.end());
+        Af.makeCompressed();
+        Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> lu;
+        lu.compute(Af);
+        if (lu.info() != Eigen::Success)
+          throw SolverError(input.source + ": mean value Laplace system (axis " + std::string(1, char('X' + a)) +
+                            ") could not be factored: " + lu.lastErrorMessage());
+        Eigen::VectorXd yf = lu.solve(b);
+        if (lu.info() != Eigen::Success || !yf.allFinite())
+          throw SolverError(input.source + ": mean value Laplace solve failed on axis " + std::string(1, char('X' + a)));
+        for (int v = 0; v < nV; ++v)
+          if (vgroup[v] < 0) u[v] = yf[var[v]];
+      }
+    }
+    out.U.col(a) = u;
+    st.seconds_final += since(t0);
+    // Planarity: exact by substitution; measured anyway.
+    for (int v = 0; v < nV; ++v)
+      if (vgroup[v] >= 0) st.planarity_error = std::max(st.planarity_error, std::abs(out.U(v, a) - k[vgroup[v]] * h) / diag);
+  }
+
+  // Inverted tets and distortion of input -> PolyCube.
+  struct Acc {
+    int inverted = 0, n = 0;
+    double sum = 0, max = 0;
+  };
+  Acc acc = oneapi::tbb::parallel_reduce(
+      oneapi::tbb::blocked_range<Eigen::Index>(0, input.T.rows()), Acc{},
+      [&](const oneapi::tbb::blocked_range<Eigen::Index>& r, Acc s) {
+        for (Eigen::Index t = r.begin(); t != r.end(); ++t) {
+          Eigen::Vector3d a = input.V.row(input.T(t, 0)), b = input.V.row(input.T(t, 1)), c = input.V.row(input.T(t, 2)),
+                          d = input.V.row(input.T(t, 3));
+          Eigen::Vector3d A = out.U.row(input.T(t, 0)), B = out.U.row(input.T(t, 1)), C = out.U.row(input.T(t, 2)),
+                          D = out.U.row(input.T(t, 3));
+          double vol = (B - A).cross(C - A).dot(D - A);
+          if (!(vol > 0)) {
+            ++s.inverted;
+            continue;
+          }
+          double dist = conformal_distortion(a, b, c, d, A, B, C, D);
+          if (std::isfinite(dist)) s.sum += dist, s.max = std::max(s.max, dist), ++s.n;
+        }
+        return s;
+      },
+      [](Acc x, const Acc& y) {
+        x.inverted += y.inverted, x.n += y.n, x.sum += y.sum, x.max = std::max(x.max, y.max);
+        return x;
+      });
+  st.inverted_tets = acc.inverted;
+  st.distortion = acc.n ? acc.sum / acc.n : 0;
+  st.distortion_max = acc.max;
+  if (stats_out) *stats_out = st;
+  return out;
+}
+
+}  // namespace polyhex

@@ -1,0 +1,73 @@
+/// @file position_deform.h
+/// @brief Position-driven deformation (paper §5.2): flatten every chart of the PolyCube structure onto an
+/// axis-aligned plane at an integer multiple of the hex edge length, keeping the ordering and distance of
+/// nearby same-axis charts, and compute the volumetric PolyCube map.
+///
+/// Per axis a (the three axes are independent):
+///  1. Poisson step. Unknowns: the a-coordinate of every vertex not on an a-chart, plus one coordinate per
+///     a-chart (vertices of a chart are substituted by their chart's unknown, so planarity is exact).
+///     Energy: Σ_edges ((u_i − u_j) − (d_i − d_j))² over the tet edges (uniform weights; d = the deformed
+///     mesh of the rotation stage, i.e. Eq. 1 with the gradients of the last iteration absorbed in d),
+///     plus Σ_pairs w_pq ((c_q − c_p) − δ_pq)² for the distance-preservation constraints.
+///  2. Distance constraints (§5.2): a multi-source Dijkstra over the tet edges from the chart vertices
+///     (approximate Voronoi partition of the volume by chart; every vertex stores its closest chart
+///     vertex). Every tet edge joining the regions of two a-charts p, q gives a sample of their axis
+///     distance δ = d_a(closest of q) − d_a(closest of p); samples are averaged per pair.
+///     Weight: w = s · exp(−max(|δ| − min_d, 0)² / σ²), min_d = 2h, σ = 3 min_d. The paper prints the
+///     exponent without its minus sign; a weight that grows with distance would contradict its "sharp
+///     falloff", so we read it as the usual Gaussian. s = `distance_weight` × (vertices of the smaller of
+///     the two charts), so that the constraint is as stiff as the chart it holds.
+///  3. Chart coordinates are rounded to integers in units of h. Rounding must not swap or merge two
+///     same-axis charts that are ordered (a distance pair, or the two ends of a chart of another axis
+///     that joins them): such pairs are pushed apart to at least one h, in their original order.
+///  4. Final solve with the rounded chart coordinates pinned: `final_solve` = "mvc_laplace" (the paper:
+///     a Laplace equation discretised with mean value coordinates, 2D on the surface, 3D in the volume,
+///     weights computed on the deformed mesh) or "poisson" (step 1's energy with the charts pinned,
+///     which keeps more of the deformed shape).
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "nodes/artefacts/polycube_map.h"
+
+namespace polyhex {
+
+struct PositionDeformParams {
+  double edge_length = 0.01;        ///< hex edge length h, fraction of the input's bbox diagonal (§6: 1 %), [1e-4, 0.5]
+  double distance_weight = 1.0;     ///< scale s of the distance-preservation constraints (0 disables them), [0, 1e6]
+  std::string final_solve = "mvc_laplace";  ///< "mvc_laplace" (§5.2) or "poisson"
+};
+
+struct PositionDeformStats {
+  int charts = 0;
+  int distance_pairs = 0;               ///< same-axis chart pairs with a distance constraint
+  int ordered_pairs = 0;                ///< pairs whose order rounding must keep (distance pairs + bridged pairs)
+  int flipped_chart_orders = 0;         ///< ordered pairs whose order the Poisson step swapped (before the rounding fix)
+  int flipped_after_rounding = 0;       ///< ordered pairs still swapped or merged after the rounding fix (should be 0)
+  int merged_same_axis_charts = 0;      ///< same-axis charts sharing a vertex, forced onto one plane
+  double chart_coordinates_rounded_max_shift = 0;  ///< max |c − k h| / h over charts
+  int inverted_tets = 0;                ///< tets of the PolyCube map with signed volume <= 0 (expected at concave edges, Fig. 9)
+  double distortion = 0;                ///< mean conformal distortion ||J||_F ||J^-1||_F / 3 (input -> PolyCube) of non-inverted tets
+  double distortion_max = 0;
+  double planarity_error = 0;           ///< max distance of a chart vertex from its plane / bbox diagonal (0 by construction)
+  double seconds_poisson = 0, seconds_final = 0;
+};
+
+/// \param input      the input tet mesh (rest positions), positively oriented
+/// \param deformed   rotation-driven deformation of `input` (same connectivity)
+/// \param seg        PolyCube structure of the deformed boundary (§5.1); its triangles index input.V
+/// \pre deformed.V.rows() == input.V.rows(), seg.F indexes input.V, seg.chart in [0, #charts)
+/// \throw InvalidInput when sizes disagree or the structure has no chart on some axis;
+///        SolverError when a linear solve fails; ConfigError for an unknown final_solve
+PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input, const TetMesh& deformed,
+                            std::shared_ptr<const PolyCubeSegmentation> seg, const PositionDeformParams& p,
+                            PositionDeformStats* stats = nullptr);
+
+/// Conformal distortion ||J||_F ||J^-1||_F / 3 of the affine map taking tet (a,b,c,d) to (A,B,C,D);
+/// 1 for a similarity; +inf when either tet is degenerate or the map inverts.
+double conformal_distortion(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                            const Eigen::Vector3d& d, const Eigen::Vector3d& A, const Eigen::Vector3d& B,
+                            const Eigen::Vector3d& C, const Eigen::Vector3d& D);
+
+}  // namespace polyhex

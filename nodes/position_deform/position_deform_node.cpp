@@ -1,0 +1,48 @@
+// Binding of the position-driven deformation (paper §5.2).
+#include "graph/node.h"
+#include "nodes/position_deform/position_deform.h"
+
+namespace polyhex {
+namespace {
+
+using P = PositionDeformParams;
+
+const bool registered = register_node(make_node<P>(
+    "position_deform/chart_planes",
+    "§5.2 PolyCube map: charts onto integer planes (hex edge units), distance constraints, MVC Laplace",
+    ParamSet<P>()
+        .add("edge_length", &P::edge_length, "hex edge length, fraction of the input's bbox diagonal", 1e-4, 0.5)
+        .add("distance_weight", &P::distance_weight, "scale of the same-axis chart distance constraints (0 = off)", 0.0, 1e6)
+        .add_choice("final_solve", &P::final_solve, {"mvc_laplace", "poisson"},
+                    "final solve with pinned charts: mean value Laplace (paper) or Poisson"),
+    {{"tets", artefact_name<TetMesh>()},
+     {"deformed", artefact_name<TetMesh>()},
+     {"segmentation", artefact_name<PolyCubeSegmentation>()}},
+    artefact_name<PolyCubeMap>(),
+    [](const P& p, const Inputs& in, NodeContext& ctx) {
+      PositionDeformStats s;
+      PolyCubeMap m = position_deform(in.get<TetMesh>(0), *in.get<TetMesh>(1), in.get<PolyCubeSegmentation>(2), p, &s);
+      auto& j = ctx.metrics;
+      j["charts"] = s.charts;
+      j["distance_pairs"] = s.distance_pairs;
+      j["ordered_pairs"] = s.ordered_pairs;
+      j["flipped_chart_orders"] = s.flipped_chart_orders;
+      j["flipped_after_rounding"] = s.flipped_after_rounding;
+      j["merged_same_axis_charts"] = s.merged_same_axis_charts;
+      j["chart_coordinates_rounded_max_shift"] = s.chart_coordinates_rounded_max_shift;
+      j["inverted_tets"] = s.inverted_tets;
+      j["distortion"] = s.distortion;
+      j["distortion_max"] = s.distortion_max;
+      j["planarity_error"] = s.planarity_error;
+      j["edge_length_abs"] = m.edge_length;
+      j["seconds_poisson"] = s.seconds_poisson;
+      j["seconds_final"] = s.seconds_final;
+      if (s.flipped_after_rounding > 0)
+        ctx.warn(std::to_string(s.flipped_after_rounding) + " same-axis chart pairs could not keep their order after rounding");
+      if (s.merged_same_axis_charts > 0)
+        ctx.warn(std::to_string(s.merged_same_axis_charts) + " same-axis charts share a vertex and were put on one plane");
+      return make_artefact(std::move(m));
+    }));
+
+}  // namespace
+}  // namespace polyhex

@@ -1,0 +1,149 @@
+// Position-driven deformation (§5.2): planarity, integer chart planes, chart order, analytic answers.
+#include <catch2/catch.hpp>
+
+#include <Eigen/Geometry>
+#include <cmath>
+
+#include "nodes/polycube_segment/polycube_segment.h"
+#include "nodes/position_deform/position_deform.h"
+#include "nodes/rotation_deform/rotation_deform.h"
+#include "nodes/tetrahedralize/tetgen.h"
+#include "tests/helpers/voxel_shapes.h"
+
+using namespace polyhex;
+
+namespace {
+
+struct Run {
+  std::shared_ptr<const TetMesh> tets;
+  TetMesh deformed;
+  std::shared_ptr<const PolyCubeSegmentation> seg;
+  PolyCubeMap map;
+  PositionDeformStats stats;
+};
+
+Run run_pipeline(const SurfaceMesh& s, double tet_edge, const PositionDeformParams& p, bool rotate = true) {
+  Run r;
+  TetgenParams tp;
+  tp.edge_length = tet_edge;
+  r.tets = std::make_shared<const TetMesh>(tetrahedralize(s, tp));
+  r.deformed = rotate ? rotation_deform(*r.tets, RotationDeformParams{}).mesh : *r.tets;
+  r.seg = std::make_shared<const PolyCubeSegmentation>(segment_polycube(r.deformed));
+  REQUIRE(r.seg->valid);
+  r.map = position_deform(r.tets, r.deformed, r.seg, p, &r.stats);
+  return r;
+}
+
+double diag(const RowMatrixX3d& V) { return (V.colwise().maxCoeff() - V.colwise().minCoeff()).norm(); }
+
+/// Every boundary triangle on its chart's plane, every plane an integer multiple of h.
+void check_planes(const Run& r) {
+  const double h = r.map.edge_length, d = diag(r.tets->V);
+  for (Eigen::Index f = 0; f < r.seg->F.rows(); ++f) {
+    int c = r.seg->chart[f], a = label_axis(r.seg->charts[c].label);
+    for (int k = 0; k < 3; ++k) {
+      double x = r.map.U(r.seg->F(f, k), a);
+      REQUIRE(std::abs(x - r.map.chart_plane[c] * h) <= 1e-9 * d);
+      REQUIRE(std::abs(x / h - std::round(x / h)) <= 1e-9 * d / h);
+    }
+  }
+  CHECK(r.stats.flipped_after_rounding == 0);
+  CHECK(r.stats.planarity_error <= 1e-12);
+}
+
+/// The first chart with the given direction label, -1 if none.
+int chart_with_label(const Run& r, int label) {
+  for (size_t c = 0; c < r.seg->charts.size(); ++c)
+    if (r.seg->charts[c].label == label) return int(c);
+  return -1;
+}
+
+}  // namespace
+
+TEST_CASE("an axis-aligned box maps onto itself: MVC Laplace has linear precision", "[position]") {
+  // [0,1]^3 with h = 0.1: planes at 0 and 10 h are where the faces already are, so the harmonic map
+  // with mean value weights (2D on the faces, 3D inside) must reproduce the identity.
+  SurfaceMesh box = test::voxel_surface(test::voxel_box(1, 1, 1));
+  PositionDeformParams p;
+  p.edge_length = 0.1 / std::sqrt(3.0);
+  Run r = run_pipeline(box, 0.08, p, /*rotate=*/false);
+  CHECK(r.seg->charts.size() == 6);
+  check_planes(r);
+  CHECK(r.stats.inverted_tets == 0);
+  double err = (r.map.U - r.tets->V).cwiseAbs().maxCoeff();
+  CHECK(err < 1e-8);
+  CHECK(r.stats.distortion == Approx(1.0).epsilon(1e-6));
+  CHECK(r.stats.chart_coordinates_rounded_max_shift < 1e-6);
+}
+
+TEST_CASE("box and L-block after the rotation stage: planar integer charts, order kept", "[position]") {
+  for (auto final_solve : {"mvc_laplace", "poisson"}) {
+    INFO(final_solve);
+    PositionDeformParams p;
+    p.edge_length = 0.05;
+    p.final_solve = final_solve;
+    SurfaceMesh box = test::voxel_surface(test::voxel_box(2, 1, 1), 0.5);
+    Run r = run_pipeline(box, 0.06, p);
+    CHECK(r.seg->charts.size() == 6);
+    check_planes(r);
+    CHECK(r.stats.inverted_tets == 0);
+    for (int a = 0; a < 3; ++a)
+      CHECK(r.map.chart_plane[chart_with_label(r, 2 * a)] > r.map.chart_plane[chart_with_label(r, 2 * a + 1)]);
+    SurfaceMesh l = test::voxel_surface({{0, 0, 0}, {1, 0, 0}, {0, 0, 1}}, 0.5);
+    Run rl = run_pipeline(l, 0.06, p);
+    CHECK(rl.seg->charts.size() == 8);
+    check_planes(rl);
+  }
+}
+
+TEST_CASE("a C-shape keeps the gap between its arms", "[position]") {
+  // C in the xy-plane: arms at y in [0,1] and [2,3], joined at x in [0,1]; the gap y in [1,2], x in [1,3].
+  SurfaceMesh c = test::voxel_surface({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 1, 0}, {0, 2, 0}, {1, 2, 0}, {2, 2, 0}}, 1.0);
+  PositionDeformParams p;
+  p.edge_length = 0.05;
+  Run r = run_pipeline(c, 0.05, p);
+  check_planes(r);
+  // The +Y chart bounding the lower arm from above and the -Y chart bounding the upper arm from below
+  // face each other across the gap: after the map the upper one must stay above, at least one h apart.
+  double lower_top = -1e9, upper_bottom = 1e9;
+  for (size_t ch = 0; ch < r.seg->charts.size(); ++ch) {
+    // locate charts by the deformed centroid of their vertices
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    int n = 0;
+    for (Eigen::Index f = 0; f < r.seg->F.rows(); ++f)
+      if (r.seg->chart[f] == int(ch))
+        for (int k = 0; k < 3; ++k) centre += r.tets->V.row(r.seg->F(f, k)).transpose(), ++n;
+    centre /= n;
+    double plane = r.map.chart_plane[ch] * r.map.edge_length;
+    if (r.seg->charts[ch].label == 2 && centre.x() > 1.2 && centre.y() < 1.5) lower_top = plane;
+    if (r.seg->charts[ch].label == 3 && centre.x() > 1.2 && centre.y() > 1.5) upper_bottom = plane;
+  }
+  REQUIRE(lower_top > -1e9);
+  REQUIRE(upper_bottom < 1e9);
+  CHECK(upper_bottom - lower_top >= r.map.edge_length * 0.999);
+  CHECK(r.stats.flipped_after_rounding == 0);
+}
+
+TEST_CASE("conformal distortion: 1 for similarities, larger for a stretch, inf for an inversion", "[position]") {
+  Eigen::Vector3d a(0, 0, 0), b(1, 0, 0), c(0, 1, 0), d(0, 0, 1);
+  Eigen::Matrix3d R = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  CHECK(conformal_distortion(a, b, c, d, 2 * R * a, 2 * R * b, 2 * R * c, 2 * R * d) == Approx(1.0));
+  Eigen::Vector3d s(2, 1, 1);
+  double stretched = conformal_distortion(a, b, c, d, a.cwiseProduct(s), b.cwiseProduct(s), c.cwiseProduct(s), d.cwiseProduct(s));
+  CHECK(stretched == Approx(std::sqrt(6.0) * std::sqrt(2.25) / 3.0));
+  CHECK(std::isinf(conformal_distortion(a, b, c, d, a, c, b, d)));
+}
+
+TEST_CASE("bad inputs to position_deform are named", "[position]") {
+  SurfaceMesh box = test::voxel_surface(test::voxel_box(1, 1, 1));
+  TetgenParams tp;
+  tp.edge_length = 0.2;
+  auto tets = std::make_shared<const TetMesh>(tetrahedralize(box, tp));
+  auto seg = std::make_shared<const PolyCubeSegmentation>(segment_polycube(*tets));
+  TetMesh other = *tets;
+  other.V.conservativeResize(other.V.rows() - 1, 3);
+  REQUIRE_THROWS_WITH(position_deform(tets, other, seg, {}), Catch::Contains("must share connectivity"));
+  PositionDeformParams p;
+  p.final_solve = "magic";
+  REQUIRE_THROWS_WITH(position_deform(tets, *tets, seg, p), Catch::Contains("not one of: mvc_laplace, poisson"));
+}
