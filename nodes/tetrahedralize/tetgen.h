@@ -35,7 +35,9 @@ struct TetgenStats {
 /// kept and the tets along them are as thin as they are. Near a surface finer than h the tets follow
 /// the surface size (TetGen grades from the boundary inwards).
 /// TetGen runs are serialised (its geometric predicates keep input-dependent global state).
-/// Nothing is printed (TetGen's -Q).
+/// Nothing is printed (TetGen's -Q). Debian's TetGen keeps its internal assert()s: an input that
+/// trips one aborts the process, which no wrapper in-process can catch (not seen with these flags
+/// on the shared surfaces, girl.off included).
 ///
 /// \param surface  closed, outward-oriented triangle surface, V #V by 3, F #F by 3
 /// \param p        params; edge_length in (0, 0.5]
