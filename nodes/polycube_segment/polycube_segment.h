@@ -1,0 +1,72 @@
+/// @file polycube_segment.h
+/// @brief PolyCube structure extraction (paper §5.1): label boundary triangles by their smoothed
+/// normals, group them into charts, clean up, split multi-orientation and highly non-planar charts,
+/// and check that the result is a valid PolyCube structure.
+#pragma once
+
+#include <filesystem>
+
+#include "nodes/artefacts/meshes.h"
+#include "nodes/artefacts/polycube.h"
+
+namespace polyhex {
+
+struct PolyCubeSegmentParams {
+  int smoothing_iterations = 3;        ///< passes of area-weighted normal averaging over edge neighbours before labelling
+  double hex_edge_length = 0.01;       ///< target hex edge, fraction of the bbox diagonal: width of multi-orientation separating charts (§5.1)
+  double small_chart_area = 0.005;     ///< a chart bounded by <= small_chart_edges edges is removed below this fraction of the surface area
+  int small_chart_edges = 2;           ///< charts bounded by at most this many PolyCube edges are removal candidates (§5.1: two)
+  bool split_multi_orientation = true; ///< split charts touching their opposite direction by a separating chart
+  bool split_wedges = true;            ///< cut highly non-planar charts at wedge tips
+  int edge_smoothing_iterations = 10;  ///< Laplacian passes on copies of the chart edges before the extremum search
+  double extremum_depth = 2.0;         ///< an edge doubles back only when it returns by this many hex edge lengths
+  double wedge_min_severity = 1e-3;    ///< wedges whose triangle area is below this fraction of bbox diagonal^2 are left alone
+  int max_cut_candidates = 200;        ///< cut candidates tested per wedge, cheapest first
+  int max_splits = 32;                 ///< upper bound on separating charts of each kind
+  int fallback_retries = 2;            ///< if invalid, retry with doubled smoothing this many times (reported as a warning)
+  bool allow_invalid = false;          ///< pass an invalid structure on with a warning instead of failing
+  bool save_surface = false;           ///< write <id>.charts.vtk (also written with --save-all)
+};
+
+/// The boundary triangles of a tet mesh (faces used by exactly one tet), outward oriented.
+/// \param mesh  V #V by 3, T #T by 4 positively oriented
+/// \return #F by 3 triangles, indices into mesh.V
+/// \throw InvalidInput when the mesh has no tets or a tet index is out of range
+RowMatrixX3i boundary_triangles(const TetMesh& mesh);
+
+/// §5.1: the PolyCube structure of the deformed tet mesh. Never throws for an invalid structure:
+/// the result says `valid` and lists the problems (see require_valid_polycube). When the first
+/// labelling is invalid it retries with doubled smoothing up to p.fallback_retries times; a retry
+/// that succeeds is reported in `warnings`.
+/// \param deformed  the output of rotation_deform (same connectivity as the input tet mesh)
+/// \pre p.hex_edge_length > 0
+/// \throw InvalidInput when the boundary is empty or not a closed 2-manifold (names an edge)
+PolyCubeSegmentation segment_polycube(const TetMesh& deformed, const PolyCubeSegmentParams& p = {});
+
+/// Charts, edges, corners and validity of a given labelling, without clean-up or splits.
+/// \param V      #V by 3 vertex positions
+/// \param F      #F by 3 closed, outward surface triangles
+/// \param label  #F direction labels 0..5
+/// \throw InvalidInput when sizes disagree, a label is outside 0..5 or the surface is not closed
+PolyCubeSegmentation analyse_polycube_labels(const RowMatrixX3d& V, const RowMatrixX3i& F,
+                                             const Eigen::VectorXi& label);
+
+/// §5.1 clean-up of a labelling: straighten chart boundaries (a triangle with two neighbours of a
+/// common other label takes it), remove small charts (area < p.small_chart_area of the surface)
+/// bounded by at most p.small_chart_edges PolyCube edges by flood fill from their neighbours; repeat.
+/// \param label  #F labels 0..5, changed in place
+/// \return number of charts removed
+/// \throw InvalidInput as analyse_polycube_labels
+int clean_up_labels(const RowMatrixX3d& V, const RowMatrixX3i& F, Eigen::VectorXi& label,
+                    const PolyCubeSegmentParams& p = {});
+
+/// \throw InvalidInput listing the problems and naming the failing charts when !s.valid
+void require_valid_polycube(const PolyCubeSegmentation& s);
+
+/// Writes the labelled surface as legacy VTK polydata with cell data `chart`, `axis` (0..2) and
+/// `label` (0..5 = +X,-X,+Y,-Y,+Z,-Z) (nodes/io write_surface, atomic).
+/// \param V  #V by 3 positions the triangles index (e.g. the deformed tet mesh's V)
+/// \pre path ends in .vtk   \throw IOError when the file cannot be written
+void write_polycube_vtk(const std::filesystem::path& path, const RowMatrixX3d& V, const PolyCubeSegmentation& s);
+
+}  // namespace polyhex

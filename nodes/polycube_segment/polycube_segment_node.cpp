@@ -1,0 +1,62 @@
+// Binding of polycube_segment (paper §5.1): deformed TetMesh -> PolyCubeSegmentation.
+#include "graph/node.h"
+#include "nodes/polycube_segment/polycube_segment.h"
+
+namespace polyhex {
+namespace {
+
+using P = PolyCubeSegmentParams;
+
+json segmentation_metrics(const PolyCubeSegmentation& s) {
+  json m;
+  m["charts"] = s.charts.size();
+  m["corners"] = s.corners.size();
+  m["edges"] = s.edges.size();
+  m["splits_multi_orientation"] = s.splits_multi_orientation;
+  m["splits_wedge"] = s.splits_wedge;
+  m["removed_small"] = s.removed_small;
+  m["valid"] = s.valid;
+  m["failing_charts"] = s.failing_charts;
+  m["problems"] = s.problems;
+  m["smoothing_iterations"] = s.smoothing_iterations;
+  m["boundary_triangles"] = s.F.rows();
+  return m;
+}
+
+const bool registered = register_node(make_node<P>(
+    "polycube_segment/default",
+    "PolyCube structure of the deformed tet mesh (§5.1): labels, charts, clean-up, multi-orientation and wedge splits",
+    ParamSet<P>()
+        .add("smoothing_iterations", &P::smoothing_iterations, "normal smoothing passes before labelling", 0, 1000)
+        .add("hex_edge_length", &P::hex_edge_length, "target hex edge, fraction of bbox diagonal (separating chart width)",
+             1e-5, 0.5)
+        .add("small_chart_area", &P::small_chart_area, "small chart: area below this fraction of the surface", 0, 1)
+        .add("small_chart_edges", &P::small_chart_edges, "small chart: bounded by at most this many edges", 0, 100)
+        .add("split_multi_orientation", &P::split_multi_orientation, "split multi-orientation charts")
+        .add("split_wedges", &P::split_wedges, "cut highly non-planar charts at wedge tips")
+        .add("edge_smoothing_iterations", &P::edge_smoothing_iterations, "smoothing passes on chart edge copies", 0,
+             10000)
+        .add("extremum_depth", &P::extremum_depth, "an edge doubles back by at least this many hex edges", 0, 1e6)
+        .add("wedge_min_severity", &P::wedge_min_severity, "minimum wedge area, fraction of bbox diagonal^2", 0, 1)
+        .add("max_cut_candidates", &P::max_cut_candidates, "cut candidates tested per wedge", 1, 100000)
+        .add("max_splits", &P::max_splits, "maximum separating charts of each kind", 0, 10000)
+        .add("fallback_retries", &P::fallback_retries, "retries with doubled smoothing when invalid", 0, 10)
+        .add("allow_invalid", &P::allow_invalid, "pass an invalid structure on with a warning")
+        .add("save_surface", &P::save_surface, "write <id>.charts.vtk"),
+    {{"deformed", artefact_name<TetMesh>()}}, artefact_name<PolyCubeSegmentation>(),
+    [](const P& p, const Inputs& in, NodeContext& ctx) {
+      auto mesh = in.get<TetMesh>(0);
+      PolyCubeSegmentation s = segment_polycube(*mesh, p);
+      ctx.metrics.update(segmentation_metrics(s));
+      for (auto& w : s.warnings) ctx.warn(w);
+      if (ctx.save_all || p.save_surface) write_polycube_vtk(ctx.out_dir / (ctx.id + ".charts.vtk"), mesh->V, s);
+      if (!s.valid) {
+        if (!p.allow_invalid) require_valid_polycube(s);
+        ctx.warn("allow_invalid: passing on an invalid PolyCube structure (failing charts " +
+                 json(s.failing_charts).dump() + ")");
+      }
+      return make_artefact(std::make_shared<const PolyCubeSegmentation>(std::move(s)));
+    }));
+
+}  // namespace
+}  // namespace polyhex
