@@ -224,45 +224,43 @@ std::string plural(size_t n, const std::string& what) {
   return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
 }
 
-// A number of a legacy VTK data block, ASCII or binary.
+// The values of a legacy VTK data block, ASCII or binary (big-endian).
 struct VtkValues {
   TextCursor& text;
   bool binary;
   std::string file;
 
+  template <class T, class Out>
+  void read_binary(size_t n, std::vector<Out>& out, const char* what) {
+    BinaryCursor b(text.text(), text.pos(), true, file);
+    for (size_t i = 0; i < n; ++i) out[i] = Out(b.get<T>(what));
+    text.seek(b.pos());
+  }
   // Reads n values of VTK type `type` (float, double, int, ...) into out (as double).
-  void read(const std::string& type, size_t n, std::vector<double>& out, const std::string& what) {
+  void read(const std::string& type, size_t n, std::vector<double>& out, const char* what) {
     out.resize(n);
     if (!binary) {
       for (size_t i = 0; i < n; ++i) out[i] = text.real(what);
       return;
     }
-    BinaryCursor b(text.text(), text.pos(), true, file);
-    for (size_t i = 0; i < n; ++i) {
-      if (type == "double") out[i] = b.get<double>(what);
-      else if (type == "float") out[i] = b.get<float>(what);
-      else if (type == "int" || type == "vtktypeint32") out[i] = b.get<int32_t>(what);
-      else if (type == "unsigned_int") out[i] = b.get<uint32_t>(what);
-      else if (type == "long" || type == "vtktypeint64") out[i] = double(b.get<int64_t>(what));
-      else if (type == "unsigned_long") out[i] = double(b.get<uint64_t>(what));
-      else if (type == "short") out[i] = b.get<int16_t>(what);
-      else if (type == "unsigned_short") out[i] = b.get<uint16_t>(what);
-      else if (type == "char") out[i] = b.get<int8_t>(what);
-      else if (type == "unsigned_char") out[i] = b.get<uint8_t>(what);
-      else text.fail("unsupported binary data type `" + type + "` in " + what);
-      if (!std::isfinite(out[i])) text.fail(what + " " + std::to_string(i) + " is not finite");
-    }
-    text.seek(b.pos());
+    if (type == "double") read_binary<double>(n, out, what);
+    else if (type == "float") read_binary<float>(n, out, what);
+    else if (type == "int" || type == "vtktypeint32") read_binary<int32_t>(n, out, what);
+    else if (type == "unsigned_int") read_binary<uint32_t>(n, out, what);
+    else if (type == "long" || type == "vtktypeint64") read_binary<int64_t>(n, out, what);
+    else if (type == "short") read_binary<int16_t>(n, out, what);
+    else if (type == "unsigned_short") read_binary<uint16_t>(n, out, what);
+    else text.fail("unsupported binary data type `" + type + "` in " + what);
+    for (size_t i = 0; i < n; ++i)
+      if (!std::isfinite(out[i])) text.fail(std::string(what) + " " + std::to_string(i) + " is not finite");
   }
-  void read_ints(size_t n, std::vector<long long>& out, const std::string& what) {
+  void read_ints(size_t n, std::vector<long long>& out, const char* what) {
     out.resize(n);
     if (!binary) {
       for (size_t i = 0; i < n; ++i) out[i] = text.integer(what);
       return;
     }
-    BinaryCursor b(text.text(), text.pos(), true, file);
-    for (size_t i = 0; i < n; ++i) out[i] = b.get<int32_t>(what);
-    text.seek(b.pos());
+    read_binary<int32_t>(n, out, what);
   }
 };
 
@@ -350,6 +348,7 @@ CellsRead read_vtk_cells(const std::filesystem::path& path, int vtk_type, int no
   r.V = to_matrix(xyz);
   const size_t nv = size_t(r.V.rows());
   std::map<long long, size_t> ignored;
+  r.cells.reserve(conn.size());
   size_t p = 0;
   for (long long i = 0; i < ncells; ++i) {
     if (p >= conn.size() || conn[p] < 0 || p + 1 + size_t(conn[p]) > conn.size())
@@ -423,17 +422,19 @@ CellsRead read_medit_cells(const std::filesystem::path& path, const std::string&
       if (n < 0) c.fail("negative " + section + " count");
       raw.resize(size_t(n * nodes));
       cell_line.resize(size_t(n));
+      const std::string index_what = section + " vertex index", ref_what = section + " reference";
       for (long long i = 0; i < n; ++i) {
         for (int k = 0; k < nodes; ++k) {
-          raw[size_t(i * nodes + k)] = c.integer(section + " vertex index");
+          raw[size_t(i * nodes + k)] = c.integer(index_what);
           if (k == 0) cell_line[size_t(i)] = c.line_no();
         }
-        c.integer(section + " reference");
+        c.integer(ref_what);
       }
       have_cells = true;
     } else if (auto it = skip.find(key); it != skip.end()) {
       long long n = c.integer("number of " + key);
-      for (long long i = 0; i < n * it->second; ++i) c.token(key + " entry");
+      const std::string what = key + " entry";
+      for (long long i = 0; i < n * it->second; ++i) c.token(what);
     } else {
       // Unknown section: skip its numbers up to the next keyword.
       r.warnings.push_back(file + ": line " + std::to_string(c.line_no()) + ": ignored unknown section `" + key + "`");

@@ -165,7 +165,7 @@ RawSurface parse_stl_binary(std::string_view data, const std::string& file, uint
   for (uint32_t t = 0; t < n; ++t) {
     b.skip(12, "triangle normal");
     for (int k = 0; k < 9; ++k) {
-      float x = b.get<float>("triangle " + std::to_string(t));
+      float x = b.get<float>("a triangle record");
       if (!std::isfinite(x))
         throw IOError(file + ": triangle " + std::to_string(t) + " has a non-finite coordinate");
       s.V.push_back(x);

@@ -88,27 +88,27 @@ bool TextCursor::next(std::string_view& tok) {
   return true;
 }
 
-std::string_view TextCursor::token(const std::string& what) {
+std::string_view TextCursor::token(std::string_view what) {
   std::string_view t;
   if (!next(t)) {
     last_line_ = eof_line();
-    fail("truncated: unexpected end of file (expected " + what + ")");
+    fail("truncated: unexpected end of file (expected " + std::string(what) + ")");
   }
   return t;
 }
 
-double TextCursor::real(const std::string& what) {
+double TextCursor::real(std::string_view what) {
   std::string_view t = token(what);
   double x;
-  if (!parse_double(t, x)) fail("expected " + what + ", got `" + std::string(t) + "`");
-  if (!std::isfinite(x)) fail(what + " is not finite (`" + std::string(t) + "`)");
+  if (!parse_double(t, x)) fail("expected " + std::string(what) + ", got `" + std::string(t) + "`");
+  if (!std::isfinite(x)) fail(std::string(what) + " is not finite (`" + std::string(t) + "`)");
   return x;
 }
 
-long long TextCursor::integer(const std::string& what) {
+long long TextCursor::integer(std::string_view what) {
   std::string_view t = token(what);
   long long x;
-  if (!parse_int(t, x)) fail("expected " + what + " (an integer), got `" + std::string(t) + "`");
+  if (!parse_int(t, x)) fail("expected " + std::string(what) + " (an integer), got `" + std::string(t) + "`");
   return x;
 }
 

@@ -40,10 +40,10 @@ class TextCursor {
   /// Next token, skipping blanks, newlines and comments. \return false at the end of the text.
   bool next(std::string_view& tok);
   /// Next token or an IOError "file: line N: unexpected end of file (expected WHAT)".
-  std::string_view token(const std::string& what);
+  std::string_view token(std::string_view what);
   /// Next token as a finite number / an integer. \throw IOError naming the line
-  double real(const std::string& what);
-  long long integer(const std::string& what);
+  double real(std::string_view what);
+  long long integer(std::string_view what);
   /// The rest of the current line (from the cursor to '\n', '\r' stripped); moves past the '\n'.
   /// \return false at the end of the text.
   bool line(std::string_view& out);
@@ -81,9 +81,9 @@ class BinaryCursor {
       : data_(data), pos_(pos), big_(big_endian), file_(std::move(file)) {}
   /// \throw IOError "file: truncated: WHAT" when fewer than sizeof(T) bytes remain
   template <class T>
-  T get(const std::string& what) {
+  T get(std::string_view what) {
     if (pos_ + sizeof(T) > data_.size())
-      throw IOError(file_ + ": truncated: unexpected end of file in " + what);
+      throw IOError(file_ + ": truncated: unexpected end of file in " + std::string(what));
     T v;
     unsigned char b[sizeof(T)];
     std::memcpy(b, data_.data() + pos_, sizeof(T));
@@ -93,8 +93,9 @@ class BinaryCursor {
     pos_ += sizeof(T);
     return v;
   }
-  void skip(size_t n, const std::string& what) {
-    if (pos_ + n > data_.size()) throw IOError(file_ + ": truncated: unexpected end of file in " + what);
+  void skip(size_t n, std::string_view what) {
+    if (pos_ + n > data_.size())
+      throw IOError(file_ + ": truncated: unexpected end of file in " + std::string(what));
     pos_ += n;
   }
   size_t pos() const { return pos_; }
