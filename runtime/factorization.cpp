@@ -29,6 +29,10 @@ struct Common {
     c.supernodal = CHOLMOD_SUPERNODAL;  // always supernodal: BLAS-3 kernels (OpenBLAS) for 3D meshes
     c.final_ll = 1;
     c.print = 0;  // errors become SolverError, CHOLMOD prints nothing
+    // METIS nested dissection only: on tet-mesh Laplacians (~50k vertices) it gives ~25 % less
+    // factor work than AMD, and the default (AMD, then METIS when AMD fills in badly) pays for both.
+    c.nmethods = 1;
+    c.method[0].ordering = CHOLMOD_METIS;
   }
   ~Common() { cholmod_finish(&c); }
   Common(const Common&) = delete;
@@ -219,6 +223,19 @@ void CholmodFactorization::analyse(const Eigen::SparseMatrix<double>& A_in) {
   m.inner.assign(A->innerIndexPtr(), A->innerIndexPtr() + A->nonZeros());
   m.stats.analyses += 1;
   m.stats.analyse_seconds += seconds_since(t0);
+}
+
+CholmodFactorization CholmodFactorization::share_analysis() const {
+  const Impl& m = *impl_;
+  if (!m.L) throw SolverError("Cholesky: no analysis to share (call analyse() first)");
+  CholmodFactorization out;
+  Impl& o = *out.impl_;
+  o.L = cholmod_copy_factor(m.L, &o.common.c);
+  if (!o.L) throw SolverError("Cholesky: CHOLMOD cannot copy the analysis (status " + std::to_string(o.common.c.status) + ")");
+  o.n = m.n;
+  o.outer = m.outer;
+  o.inner = m.inner;
+  return out;
 }
 
 void CholmodFactorization::factor(const Eigen::SparseMatrix<double>& A_in) {

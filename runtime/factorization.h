@@ -65,6 +65,11 @@ class CholmodFactorization {
   /// \throw SolverError when A is not square, empty, holds only an upper triangle, or CHOLMOD fails
   void analyse(const Eigen::SparseMatrix<double>& A);
 
+  /// A new factorization holding a copy of this one's symbolic analysis, for a matrix with the same
+  /// pattern (and storage); its factor() then needs no analysis (its stats count none).
+  /// \throw SolverError when there is no analysis yet or CHOLMOD cannot copy it
+  CholmodFactorization share_analysis() const;
+
   /// Numeric factorization of A, reusing the symbolic analysis (analyses first if there is none).
   /// \pre A has exactly the pattern (and storage) given to analyse()
   /// \throw SolverError when the pattern differs from the analysed one, A has a non-finite entry, or

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <functional>
 #include <numeric>
 
 #include "runtime/errors.h"
@@ -80,21 +81,30 @@ Csr vertex_tet_csr(const RowMatrixX4i& T, int nV) {
   });
 }
 
+/// True when a tet other than t holds the vertices a, b, c: intersect the sorted tet lists of a and b,
+/// check c on the (few) tets around the edge ab.
+bool face_shared(const RowMatrixX4i& T, const Csr& vt, int t, int a, int b, int c) {
+  const int *p = vt.begin(a), *pe = vt.end(a), *q = vt.begin(b), *qe = vt.end(b);
+  while (p != pe && q != qe) {
+    if (*p < *q) {
+      ++p;
+    } else if (*q < *p) {
+      ++q;
+    } else {
+      if (*p != t && tet_has(T, *p, c)) return true;
+      ++p, ++q;
+    }
+  }
+  return false;
+}
+
 RowMatrixX3i boundary_faces_from(const RowMatrixX4i& T, const Csr& vt) {
   const int nT = static_cast<int>(T.rows());
   std::vector<char> is_boundary(4 * static_cast<size_t>(nT), 0);
   parallel_range(nT, [&](int t) {
-    for (int f = 0; f < 4; ++f) {
-      const int a = T(t, kOutwardFaces[f][0]), b = T(t, kOutwardFaces[f][1]), c = T(t, kOutwardFaces[f][2]);
-      // Search the tets around the vertex with the fewest tets.
-      int s = a;
-      if (vt.size(b) < vt.size(s)) s = b;
-      if (vt.size(c) < vt.size(s)) s = c;
-      bool shared = false;
-      for (const int* o = vt.begin(s); o != vt.end(s) && !shared; ++o)
-        shared = *o != t && tet_has(T, *o, a) && tet_has(T, *o, b) && tet_has(T, *o, c);
-      is_boundary[4 * size_t(t) + f] = !shared;
-    }
+    for (int f = 0; f < 4; ++f)
+      is_boundary[4 * size_t(t) + f] =
+          !face_shared(T, vt, t, T(t, kOutwardFaces[f][0]), T(t, kOutwardFaces[f][1]), T(t, kOutwardFaces[f][2]));
   });
   const long count = std::count(is_boundary.begin(), is_boundary.end(), 1);
   RowMatrixX3i F(count, 3);
@@ -108,31 +118,27 @@ RowMatrixX3i boundary_faces_from(const RowMatrixX4i& T, const Csr& vt) {
   return F;
 }
 
-/// Sorted unique neighbours of vertex v (tet edges) into buf.
-void gather_neighbours(const RowMatrixX4i& T, const Csr& vt, int v, std::vector<int>& buf) {
-  buf.clear();
-  for (const int* t = vt.begin(v); t != vt.end(v); ++t)
-    for (int k = 0; k < 4; ++k)
-      if (T(*t, k) != v) buf.push_back(T(*t, k));
-  std::sort(buf.begin(), buf.end());
-  buf.erase(std::unique(buf.begin(), buf.end()), buf.end());
-}
-
+/// vertex -> sorted unique neighbours (tet edges). One pass: each vertex gathers the other vertices
+/// of its tets into a slot of 3 x (its tet count), sorts and dedupes it in place; then compaction.
 Csr neighbour_csr(const RowMatrixX4i& T, const Csr& vt, int nV) {
+  std::vector<int> slot(nV + 1, 0), size(nV);
+  for (int v = 0; v < nV; ++v) slot[v + 1] = slot[v] + 3 * vt.size(v);
+  std::vector<int> buf(slot.back());
+  parallel_range(nV, [&](int v) {
+    int* out = buf.data() + slot[v];
+    int k = 0;
+    for (const int* t = vt.begin(v); t != vt.end(v); ++t)
+      for (int c = 0; c < 4; ++c)
+        if (T(*t, c) != v) out[k++] = T(*t, c);
+    std::sort(out, out + k);
+    size[v] = static_cast<int>(std::unique(out, out + k) - out);
+  });
   Csr c;
   c.offsets.assign(nV + 1, 0);
-  tbb::combinable<std::vector<int>> bufs;
-  parallel_range(nV, [&](int v) {
-    auto& buf = bufs.local();
-    gather_neighbours(T, vt, v, buf);
-    c.offsets[v + 1] = static_cast<int>(buf.size());
-  });
-  std::partial_sum(c.offsets.begin(), c.offsets.end(), c.offsets.begin());
+  for (int v = 0; v < nV; ++v) c.offsets[v + 1] = c.offsets[v] + size[v];
   c.items.resize(c.offsets.back());
   parallel_range(nV, [&](int v) {
-    auto& buf = bufs.local();
-    gather_neighbours(T, vt, v, buf);
-    std::copy(buf.begin(), buf.end(), c.items.begin() + c.offsets[v]);
+    std::copy(buf.begin() + slot[v], buf.begin() + slot[v] + size[v], c.items.begin() + c.offsets[v]);
   });
   return c;
 }
@@ -393,11 +399,19 @@ RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformP
   // §4.2 Eq. 1 times N_i: graph Laplacian with one Dirichlet vertex per component.
   const Eigen::SparseMatrix<double> P = laplacian_lower(top, std::vector<double>(n, 0.0), top.pinned);
   std::vector<Eigen::Matrix3d> Dinv0(nT);
-  parallel_range(nT, [&](int t) { Dinv0[t] = edge_matrix(input.V, input.T, t).inverse(); });
-  const double volume0 = tet_figures(input.V, input.T, Dinv0).volume;
+  tbb::combinable<double> vol_acc(0.0);
+  parallel_range(nT, [&](int t) {
+    const Eigen::Matrix3d D = edge_matrix(input.V, input.T, t);
+    vol_acc.local() += D.determinant() / 6.0;
+    Dinv0[t] = D.inverse();
+  });
+  const double volume0 = vol_acc.combine(std::plus<double>());
   res.assemble_seconds = seconds_since(t_assemble);
 
-  CholmodFactorization quat_solver, pos_solver;
+  // Q and P share their pattern (P keeps explicit zeros in the pinned rows): one analysis.
+  CholmodFactorization quat_solver;
+  quat_solver.analyse(Q);
+  CholmodFactorization pos_solver = quat_solver.share_analysis();
   quat_solver.factor(Q);
   pos_solver.factor(P);
 

@@ -97,6 +97,14 @@ TEST_CASE("cholmod: multi-column == per-column == parallel, and counts", "[cholm
   Eigen::MatrixXd X2 = f.solve(B, SolveMode::Parallel);
   CHECK((full_of(A2) * X2 - B).norm() / B.norm() < 1e-10);
 
+  // A second factorization sharing the analysis solves a different matrix of the same pattern.
+  CholmodFactorization g = f.share_analysis();
+  g.factor(A);
+  CHECK(g.stats().analyses == 0);
+  CHECK(g.stats().factorizations == 1);
+  CHECK((g.solve(B) - Xm).cwiseAbs().maxCoeff() < 1e-12);
+  CHECK_SOLVER_ERROR(CholmodFactorization().share_analysis(), Catch::Contains("no analysis to share"));
+
   const auto& s = f.stats();
   CHECK(s.analyses == 1);
   CHECK(s.factorizations == 2);
