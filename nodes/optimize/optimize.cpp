@@ -1,0 +1,394 @@
+// Hex mesh optimization (paper §6): untangle, max-min scaled Jacobian, shape improvement. See optimize.h.
+#include "nodes/optimize/optimize.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "nodes/quality/quality.h"
+#include "nodes/quality/triangle_tree.h"
+#include "runtime/errors.h"
+
+namespace polyhex {
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+using Clock = std::chrono::steady_clock;
+
+// Corner c and its three edge neighbours, ordered so that the determinant is positive for a valid hex.
+constexpr int kCorner[8][4] = {{0, 1, 3, 4}, {1, 2, 0, 5}, {2, 3, 1, 6}, {3, 0, 2, 7},
+                               {4, 7, 5, 0}, {5, 4, 6, 1}, {6, 5, 7, 2}, {7, 6, 4, 3}};
+
+double chi(double d, double eps) { return 0.5 * (d + std::sqrt(eps * eps + d * d)); }
+
+/// Normalised corner determinants of a hex (edge vectors over `scale`).
+double min_corner_det(const std::array<Vec3, 8>& p, double scale) {
+  double m = std::numeric_limits<double>::infinity();
+  for (const auto& c : kCorner) {
+    const Vec3 a = (p[size_t(c[1])] - p[size_t(c[0])]) / scale, b = (p[size_t(c[2])] - p[size_t(c[0])]) / scale,
+               d = (p[size_t(c[3])] - p[size_t(c[0])]) / scale;
+    m = std::min(m, a.dot(b.cross(d)));
+  }
+  return m;
+}
+
+class Optimizer {
+ public:
+  Optimizer(const HexMesh& mesh, const SurfaceMesh& surface, const OptimizeParams& p, OptimizeStats& st)
+      : p_(p), st_(st), V_(mesh.V), H_(mesh.H), tree_(surface.V, surface.F), t0_(Clock::now()) {
+    normals_.resize(size_t(surface.F.rows()));
+    for (Eigen::Index f = 0; f < surface.F.rows(); ++f) {
+      const Vec3 a = surface.V.row(surface.F(f, 0)).transpose(), b = surface.V.row(surface.F(f, 1)).transpose(),
+                 c = surface.V.row(surface.F(f, 2)).transpose();
+      const Vec3 n = (b - a).cross(c - a);
+      normals_[size_t(f)] = n.norm() > 0 ? Vec3(n.normalized()) : Vec3::Zero();
+    }
+    diag_ = (surface.V.colwise().maxCoeff() - surface.V.colwise().minCoeff()).norm();
+    build_incidence();
+    colour();
+    const auto Q = hex_boundary_quads(mesh);
+    boundary_.assign(size_t(V_.rows()), 0);
+    for (Eigen::Index q = 0; q < Q.rows(); ++q)
+      for (int k = 0; k < 4; ++k) boundary_[size_t(Q(q, k))] = 1;
+    for (Eigen::Index v = 0; v < V_.rows(); ++v)
+      if (boundary_[size_t(v)]) V_.row(v) = tree_.closest(V_.row(v).transpose()).point.transpose();
+  }
+
+  HexMesh run(const std::string& source) {
+    untangle();
+    maxmin();
+    shape();
+    HexMesh out;
+    out.V = V_;
+    out.H = H_;
+    out.source = source;
+    for (Eigen::Index v = 0; v < V_.rows(); ++v)
+      if (boundary_[size_t(v)])
+        st_.boundary_distance_max = std::max(st_.boundary_distance_max, tree_.distance(V_.row(v).transpose()) / diag_);
+    return out;
+  }
+
+ private:
+  // ------------------------------------------------------------------------------------------
+  // structure
+
+  void build_incidence() {
+    const Eigen::Index nv = V_.rows();
+    start_.assign(size_t(nv) + 1, 0);
+    for (Eigen::Index h = 0; h < H_.rows(); ++h)
+      for (int k = 0; k < 8; ++k) ++start_[size_t(H_(h, k)) + 1];
+    for (size_t i = 0; i < size_t(nv); ++i) start_[i + 1] += start_[i];
+    inc_.resize(size_t(start_.back()));
+    std::vector<int> fill(start_.begin(), start_.end() - 1);
+    for (Eigen::Index h = 0; h < H_.rows(); ++h)
+      for (int k = 0; k < 8; ++k) inc_[size_t(fill[size_t(H_(h, k))]++)] = int(h);
+    // edge neighbours, and the local edge length
+    nbr_.assign(size_t(nv), {});
+    static constexpr int kEdges[12][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6},
+                                          {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
+    for (Eigen::Index h = 0; h < H_.rows(); ++h)
+      for (const auto& e : kEdges) {
+        nbr_[size_t(H_(h, e[0]))].push_back(H_(h, e[1]));
+        nbr_[size_t(H_(h, e[1]))].push_back(H_(h, e[0]));
+      }
+    scale_.assign(size_t(nv), 1.0);
+    for (size_t v = 0; v < size_t(nv); ++v) {
+      auto& n = nbr_[v];
+      std::sort(n.begin(), n.end());
+      n.erase(std::unique(n.begin(), n.end()), n.end());
+      double s = 0;
+      for (int w : n) s += (V_.row(w) - V_.row(Eigen::Index(v))).norm();
+      if (!n.empty() && s > 0) scale_[v] = s / double(n.size());
+    }
+  }
+
+  /// Greedy colouring: two vertices of one hex never share a colour.
+  void colour() {
+    const size_t nv = size_t(V_.rows());
+    std::vector<int> col(nv, -1);
+    std::vector<int> used;
+    int ncol = 0;
+    for (size_t v = 0; v < nv; ++v) {
+      if (start_[v] == start_[v + 1]) continue;  // unused vertex
+      used.assign(size_t(ncol) + 1, 0);
+      for (int i = start_[v]; i < start_[v + 1]; ++i)
+        for (int k = 0; k < 8; ++k) {
+          const int c = col[size_t(H_(inc_[size_t(i)], k))];
+          if (c >= 0) used[size_t(c)] = 1;
+        }
+      int c = 0;
+      while (used[size_t(c)]) ++c;
+      col[v] = c;
+      ncol = std::max(ncol, c + 1);
+    }
+    classes_.assign(size_t(ncol), {});
+    for (size_t v = 0; v < nv; ++v)
+      if (col[v] >= 0) classes_[size_t(col[v])].push_back(int(v));
+    st_.colours = ncol;
+  }
+
+  std::array<Vec3, 8> points(int h) const {
+    std::array<Vec3, 8> p;
+    for (int k = 0; k < 8; ++k) p[size_t(k)] = V_.row(H_(h, k)).transpose();
+    return p;
+  }
+
+  // ------------------------------------------------------------------------------------------
+  // local measures of vertex v (at its current position)
+
+  struct Local {
+    double sj_min;    ///< min scaled Jacobian (centre term included) of the incident hexes
+    double sj_sum;
+    int inverted;     ///< incident hexes with a corner scaled Jacobian <= 0
+  };
+  Local local(int v) const {
+    Local l{1.0, 0.0, 0};
+    for (int i = start_[size_t(v)]; i < start_[size_t(v) + 1]; ++i) {
+      const HexSJ s = hex_scaled_jacobian(points(inc_[size_t(i)]));
+      l.sj_min = std::min(l.sj_min, s.sj);
+      l.sj_sum += s.sj;
+      l.inverted += s.corner_min <= 0;
+    }
+    return l;
+  }
+  double energy(int v, double eps) const {
+    double e = 0;
+    for (int i = start_[size_t(v)]; i < start_[size_t(v) + 1]; ++i)
+      e += hex_winslow_energy(points(inc_[size_t(i)]), scale_[size_t(v)], eps);
+    return e;
+  }
+  /// Soft minimum of the corner and centre scaled Jacobians, negated (to be minimised).
+  double soft_min(int v) const {
+    constexpr double beta = 40.0;
+    double m = 1.0;
+    std::vector<double> terms;
+    terms.reserve(72);
+    for (int i = start_[size_t(v)]; i < start_[size_t(v) + 1]; ++i) {
+      const auto p = points(inc_[size_t(i)]);
+      for (const auto& c : kCorner) {
+        const Vec3 a = p[size_t(c[1])] - p[size_t(c[0])], b = p[size_t(c[2])] - p[size_t(c[0])],
+                   d = p[size_t(c[3])] - p[size_t(c[0])];
+        const double len = a.norm() * b.norm() * d.norm();
+        const double s = len > 0 ? a.dot(b.cross(d)) / len : -1.0;
+        terms.push_back(s);
+        m = std::min(m, s);
+      }
+      terms.push_back(hex_scaled_jacobian(p).sj);
+      m = std::min(m, terms.back());
+    }
+    double sum = 0;
+    for (double s : terms) sum += std::exp(-beta * (s - m));
+    return -(m - std::log(sum) / beta);
+  }
+
+  // ------------------------------------------------------------------------------------------
+  // one vertex: descent on `objective` (minimised), accepted by `accept(before)`
+
+  Vec3 project(int v, const Vec3& x) const { return boundary_[size_t(v)] ? tree_.closest(x).point : x; }
+
+  /// Moves vertex v to decrease f; `ok()` judges the trial position (V_ holds it). Returns true if moved.
+  template <class F, class Ok>
+  bool descend(int v, F f, Ok ok, double first_step, const Vec3* extra = nullptr) {
+    const Vec3 x0 = V_.row(v).transpose();
+    const double h = scale_[size_t(v)];
+    const double f0 = f();
+    Vec3 g;
+    const double d = 1e-4 * h;
+    for (int a = 0; a < 3; ++a) {
+      V_(v, a) = x0[a] + d;
+      const double fp = f();
+      V_(v, a) = x0[a] - d;
+      const double fm = f();
+      V_(v, a) = x0[a];
+      g[a] = (fp - fm) / (2 * d);
+    }
+    Vec3 normal = Vec3::Zero();
+    if (boundary_[size_t(v)]) {
+      const auto hit = tree_.closest(x0);
+      normal = normals_[size_t(hit.triangle)];
+      g -= g.dot(normal) * normal;
+    }
+    auto trial = [&](const Vec3& x) {
+      V_.row(v) = project(v, x).transpose();
+      if (f() < f0 - 1e-12 * std::max(1.0, std::abs(f0)) && ok()) return true;
+      V_.row(v) = x0.transpose();
+      return false;
+    };
+    if (extra && trial(*extra)) return true;
+    const double gn = g.norm();
+    if (!(gn > 0) || !std::isfinite(gn)) return false;
+    const Vec3 dir = -g / gn;
+    double step = std::min(first_step * h, f0 > 0 ? 2.0 * f0 / gn : first_step * h);
+    step = std::max(step, 1e-3 * h);
+    for (int k = 0; k < 12; ++k, step *= 0.5)
+      if (trial(x0 + step * dir)) return true;
+    return false;
+  }
+
+ private:
+  bool out_of_time() {
+    if (std::chrono::duration<double>(Clock::now() - t0_).count() > p_.time_budget) st_.time_budget_hit = true;
+    return st_.time_budget_hit;
+  }
+
+  bool movable(int v) const { return p_.move_boundary || !boundary_[size_t(v)]; }
+
+  /// One Gauss-Seidel sweep over the selected vertices, colour by colour, in parallel within a colour.
+  template <class Step>
+  long sweep(const std::vector<char>& selected, Step step) {
+    std::atomic<long> moved{0};
+    for (const auto& cls : classes_) {
+      if (out_of_time()) break;
+      tbb::parallel_for(size_t(0), cls.size(), [&](size_t i) {
+        const int v = cls[i];
+        if (selected[size_t(v)] && movable(v) && step(v)) ++moved;
+      });
+    }
+    st_.moves += moved;
+    return moved;
+  }
+
+  long count_inverted(double* det_min = nullptr) const {
+    long n = 0;
+    double m = std::numeric_limits<double>::infinity();
+    for (Eigen::Index h = 0; h < H_.rows(); ++h) {
+      const auto p = points(int(h));
+      n += hex_scaled_jacobian(p).corner_min <= 0;
+      if (det_min) m = std::min(m, min_corner_det(p, scale_[size_t(H_(h, 0))]));
+    }
+    if (det_min) *det_min = m;
+    return n;
+  }
+
+  // (a) untangling
+  void untangle() {
+    for (int it = 0; it < p_.untangle_iterations && !out_of_time(); ++it) {
+      double dmin = 0;
+      if (count_inverted(&dmin) == 0) return;
+      const double eps = std::sqrt(1e-8 + 0.04 * std::min(dmin, 0.0) * std::min(dmin, 0.0));
+      // vertices of inverted hexes and of the hexes around them
+      std::vector<char> sel(size_t(V_.rows()), 0);
+      for (Eigen::Index h = 0; h < H_.rows(); ++h)
+        if (hex_scaled_jacobian(points(int(h))).corner_min <= 0)
+          for (int k = 0; k < 8; ++k) {
+            const int v = H_(h, k);
+            for (int i = start_[size_t(v)]; i < start_[size_t(v) + 1]; ++i)
+              for (int m = 0; m < 8; ++m) sel[size_t(H_(inc_[size_t(i)], m))] = 1;
+          }
+      ++st_.untangle_sweeps;
+      ++st_.iterations;
+      sweep(sel, [&](int v) {
+        const int inv0 = local(v).inverted;
+        return descend(v, [&] { return energy(v, eps); }, [&] { return local(v).inverted <= inv0; }, 0.5);
+      });
+    }
+  }
+
+  // (b) per-vertex max-min scaled Jacobian
+  void maxmin() {
+    double prev = -2;
+    for (int it = 0; it < p_.iterations && !out_of_time(); ++it) {
+      std::vector<char> sel(size_t(V_.rows()), 0);
+      double gmin = 1;
+      for (Eigen::Index h = 0; h < H_.rows(); ++h) {
+        const double s = hex_scaled_jacobian(points(int(h))).sj;
+        gmin = std::min(gmin, s);
+        if (s < p_.target_sj)
+          for (int k = 0; k < 8; ++k) sel[size_t(H_(h, k))] = 1;
+      }
+      if (gmin <= prev + 1e-5 && it > 2) break;
+      prev = gmin;
+      ++st_.maxmin_sweeps;
+      ++st_.iterations;
+      const long moved = sweep(sel, [&](int v) {
+        const Local l0 = local(v);
+        // candidate: the average of the edge neighbours (interior vertices)
+        Vec3 avg = Vec3::Zero();
+        for (int w : nbr_[size_t(v)]) avg += V_.row(w).transpose();
+        avg /= double(std::max<size_t>(nbr_[size_t(v)].size(), 1));
+        auto ok = [&] {
+          const Local l = local(v);
+          return l.inverted <= l0.inverted && l.sj_min > l0.sj_min + 1e-9;
+        };
+        return descend(v, [&] { return soft_min(v); }, ok, 0.2, boundary_[size_t(v)] ? nullptr : &avg);
+      });
+      if (moved == 0) break;
+    }
+  }
+
+  // (c) global shape improvement: coordinate descent of the Winslow energy of the whole mesh
+  void shape() {
+    std::vector<char> all(size_t(V_.rows()), 1);
+    for (int it = 0; it < p_.shape_iterations && !out_of_time(); ++it) {
+      ++st_.shape_sweeps;
+      ++st_.iterations;
+      const long moved = sweep(all, [&](int v) {
+        const Local l0 = local(v);
+        auto ok = [&] {
+          const Local l = local(v);
+          return l.inverted <= l0.inverted && l.sj_min >= l0.sj_min;
+        };
+        return descend(v, [&] { return energy(v, 1e-6); }, ok, 0.2);
+      });
+      if (moved == 0) break;
+    }
+  }
+
+  const OptimizeParams& p_;
+  OptimizeStats& st_;
+  RowMatrixX3d V_;
+  const RowMatrixX8i& H_;
+  TriangleTree tree_;
+  Clock::time_point t0_;
+  double diag_ = 1;
+  std::vector<int> start_, inc_;
+  std::vector<std::vector<int>> nbr_;
+  std::vector<double> scale_;
+  std::vector<std::vector<int>> classes_;
+  std::vector<char> boundary_;
+  std::vector<Vec3> normals_;
+};
+
+void summarise(const HexMesh& m, double& sj_min, double& sj_avg, long& inverted) {
+  Eigen::VectorXd sj, corner;
+  hex_scaled_jacobians(m, sj, corner);
+  sj_min = sj.minCoeff();
+  sj_avg = sj.mean();
+  inverted = long((corner.array() <= 0).count());
+}
+
+}  // namespace
+
+double hex_winslow_energy(const std::array<Eigen::Vector3d, 8>& p, double scale, double eps) {
+  double e = 0;
+  for (const auto& c : kCorner) {
+    Eigen::Matrix3d J;
+    J.col(0) = (p[size_t(c[1])] - p[size_t(c[0])]) / scale;
+    J.col(1) = (p[size_t(c[2])] - p[size_t(c[0])]) / scale;
+    J.col(2) = (p[size_t(c[3])] - p[size_t(c[0])]) / scale;
+    e += J.squaredNorm() / (3.0 * std::pow(chi(J.determinant(), eps), 2.0 / 3.0));
+  }
+  return e;
+}
+
+HexMesh optimize_hexes(const HexMesh& mesh, const SurfaceMesh& surface, const OptimizeParams& p, OptimizeStats* stats) {
+  const auto t0 = Clock::now();
+  check_hex_mesh(mesh);
+  OptimizeStats st;
+  summarise(mesh, st.sj_min_before, st.sj_avg_before, st.inverted_before);
+  Optimizer opt(mesh, surface, p, st);
+  HexMesh out = opt.run(mesh.source);
+  summarise(out, st.sj_min_after, st.sj_avg_after, st.inverted_after);
+  st.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  if (stats) *stats = st;
+  return out;
+}
+
+}  // namespace polyhex

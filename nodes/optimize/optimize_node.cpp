@@ -1,0 +1,50 @@
+/// @file optimize_node.cpp
+/// @brief Binding of `optimize/sj` (paper §6: vertex repositioning and shape improvement).
+#include "graph/node.h"
+#include "nodes/optimize/optimize.h"
+
+namespace polyhex {
+namespace {
+
+using P = OptimizeParams;
+
+const bool registered = register_node(make_node<P>(
+    "optimize/sj",
+    "§6 optimization: untangle (regularised Winslow energy), per-vertex max-min scaled Jacobian, global shape "
+    "improvement; boundary vertices stay on the input surface",
+    ParamSet<P>()
+        .add("untangle_iterations", &P::untangle_iterations, "max untangling sweeps", 0, 10000)
+        .add("iterations", &P::iterations, "max max-min scaled Jacobian sweeps", 0, 10000)
+        .add("shape_iterations", &P::shape_iterations, "global shape-improvement sweeps", 0, 10000)
+        .add("target_sj", &P::target_sj, "max-min sweeps move vertices of hexes below this scaled Jacobian", 0.0, 1.0)
+        .add("time_budget", &P::time_budget, "seconds for the whole stage", 0.0, 1e6)
+        .add("move_boundary", &P::move_boundary, "boundary vertices may slide on the surface"),
+    {{"hexes", artefact_name<HexMesh>()}, {"surface", artefact_name<SurfaceMesh>()}}, artefact_name<HexMesh>(),
+    [](const P& p, const Inputs& in, NodeContext& ctx) {
+      OptimizeStats s;
+      HexMesh out = optimize_hexes(*in.get<HexMesh>(0), *in.get<SurfaceMesh>(1), p, &s);
+      auto& j = ctx.metrics;
+      j["sj_min_before"] = s.sj_min_before;
+      j["sj_avg_before"] = s.sj_avg_before;
+      j["inverted_before"] = s.inverted_before;
+      j["sj_min"] = s.sj_min_after;
+      j["sj_avg"] = s.sj_avg_after;
+      j["inverted"] = s.inverted_after;
+      j["untangle_sweeps"] = s.untangle_sweeps;
+      j["maxmin_sweeps"] = s.maxmin_sweeps;
+      j["shape_sweeps"] = s.shape_sweeps;
+      j["iterations"] = s.iterations;
+      j["moves"] = s.moves;
+      j["colours"] = s.colours;
+      j["boundary_distance_max"] = s.boundary_distance_max;
+      j["time_budget_hit"] = s.time_budget_hit;
+      j["seconds"] = s.seconds;
+      if (s.inverted_after > 0)
+        ctx.warn(std::to_string(s.inverted_after) + " hexes are still inverted after optimization (" +
+                 std::to_string(s.inverted_before) + " before)");
+      if (s.time_budget_hit) ctx.warn("optimization stopped at its time budget of " + std::to_string(p.time_budget) + " s");
+      return make_artefact(std::move(out));
+    }));
+
+}  // namespace
+}  // namespace polyhex

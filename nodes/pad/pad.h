@@ -1,0 +1,34 @@
+/// @file pad.h
+/// @brief Padding layer (paper §6 inset, [She07, Mar09]): every boundary quad is extruded into a hex,
+/// which gives the optimization the freedom the hexes at PolyCube edges and corners lack on smooth parts.
+#pragma once
+
+#include "nodes/artefacts/meshes.h"
+
+namespace polyhex {
+
+struct PadParams {
+  double thickness = 0.4;   ///< inward offset of the inner copies, fraction of the local hex edge, (0, 0.9]
+  int max_halvings = 10;    ///< halve a vertex's offset at most this often while a hex it touches is inverted, [0, 30]
+};
+
+struct PadStats {
+  long hexes_added = 0;     ///< = boundary quads of the input
+  long vertices_added = 0;  ///< = boundary vertices of the input
+  long inverted = 0;        ///< hexes of the result with a corner scaled Jacobian <= 0
+  long limited = 0;         ///< boundary vertices whose offset had to be reduced
+  double seconds = 0;
+};
+
+/// Extrudes the boundary into one layer of hexes. Every boundary vertex v is duplicated: the inner copy
+/// replaces v in the existing hexes and moves inward along the averaged inward normal of its boundary
+/// quads by thickness x (mean length of its edges), halved while a hex it touches is inverted (never
+/// below the original positions' validity); the outer copy stays (projected onto `surface` if given).
+/// For each boundary quad (a, b, c, d), outward in its hex, the new hex is (a', b', c', d', a, b, c, d).
+/// \param mesh     conforming hex mesh, VTK_HEXAHEDRON order
+/// \param surface  the input surface or null; if given, the outer vertices are projected onto it
+/// \return the padded mesh: V = [input vertices, inner copies], hexes = [input hexes, layer]
+/// \throw InvalidInput when the mesh fails check_hex_mesh or has no boundary
+HexMesh pad_boundary(const HexMesh& mesh, const SurfaceMesh* surface, const PadParams& p = {}, PadStats* stats = nullptr);
+
+}  // namespace polyhex

@@ -1,0 +1,105 @@
+// Hex optimization (§6): max-min SJ never lowers the minimum, untangling, boundary on the surface.
+#include <catch2/catch.hpp>
+
+#include <random>
+
+#include "nodes/optimize/optimize.h"
+#include "nodes/quality/quality.h"
+#include "nodes/quality/triangle_tree.h"
+#include "tests/nodes/hex_extract/hex_test_util.h"
+
+using namespace polyhex;
+
+namespace {
+
+/// Max distance of the boundary vertices from the surface, over its bbox diagonal.
+double boundary_distance(const HexMesh& m, const SurfaceMesh& s) {
+  TriangleTree tree(s.V, s.F);
+  const auto Q = hex_boundary_quads(m);
+  double d = 0;
+  for (Eigen::Index q = 0; q < Q.rows(); ++q)
+    for (int k = 0; k < 4; ++k) d = std::max(d, tree.distance(m.V.row(Q(q, k)).transpose()));
+  return d / (s.V.colwise().maxCoeff() - s.V.colwise().minCoeff()).norm();
+}
+
+bool on_box_boundary(const Eigen::RowVector3d& x, double n) {
+  return (x.array() < 1e-12).any() || (x.array() > n - 1e-12).any();
+}
+
+}  // namespace
+
+TEST_CASE("the Winslow energy of a cube is 8 at any scale and grows with distortion", "[optimize]") {
+  HexMesh g = test::grid_hex_mesh(1, 1, 1, 2.0);
+  std::array<Eigen::Vector3d, 8> p;
+  for (int k = 0; k < 8; ++k) p[size_t(k)] = g.V.row(g.H(0, k)).transpose();
+  CHECK(hex_winslow_energy(p, 2.0, 1e-9) == Approx(8.0).epsilon(1e-6));
+  CHECK(hex_winslow_energy(p, 1.0, 1e-9) == Approx(8.0).epsilon(1e-6));
+  p[6] += Eigen::Vector3d(0.5, 0.3, -0.2);
+  CHECK(hex_winslow_energy(p, 2.0, 1e-9) > 8.01);
+}
+
+TEST_CASE("optimizing a perturbed grid raises the minimum scaled Jacobian and keeps the boundary", "[optimize]") {
+  const int n = 4;
+  HexMesh g = test::grid_hex_mesh(n, n, n);
+  SurfaceMesh s = test::voxel_surface(test::voxel_box(n, n, n));
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  for (Eigen::Index v = 0; v < g.V.rows(); ++v) {
+    const bool b = on_box_boundary(g.V.row(v), n);
+    for (int a = 0; a < 3; ++a) {
+      // boundary vertices slide within their face(s) only, so they stay on the surface
+      const bool fixed = b && (g.V(v, a) < 1e-12 || g.V(v, a) > n - 1e-12);
+      if (!fixed) g.V(v, a) += u(rng);
+    }
+  }
+  HexQuality before = hex_quality(g, nullptr);
+  REQUIRE(before.inverted == 0);
+  OptimizeStats st;
+  HexMesh m = optimize_hexes(g, s, {}, &st);
+  HexQuality after = hex_quality(m, nullptr);
+  CHECK(st.sj_min_before == Approx(before.sj_min));
+  CHECK(after.sj_min == Approx(st.sj_min_after));
+  CHECK(after.sj_min > before.sj_min + 0.05);
+  CHECK(after.sj_avg > before.sj_avg);
+  CHECK(after.inverted == 0);
+  CHECK(st.inverted_after == 0);
+  CHECK(st.moves > 0);
+  CHECK(boundary_distance(m, s) < 1e-9);
+  CHECK(st.boundary_distance_max < 1e-9);
+  CHECK(m.H == g.H);
+}
+
+TEST_CASE("optimization never lowers the minimum of an already perfect grid", "[optimize]") {
+  HexMesh g = test::grid_hex_mesh(3, 3, 3);
+  SurfaceMesh s = test::voxel_surface(test::voxel_box(3, 3, 3));
+  OptimizeStats st;
+  HexMesh m = optimize_hexes(g, s, {}, &st);
+  CHECK(st.sj_min_after >= st.sj_min_before - 1e-12);
+  CHECK(st.sj_min_after == Approx(1.0));
+  CHECK((m.V - g.V).cwiseAbs().maxCoeff() < 1e-9);
+}
+
+TEST_CASE("an inverted hex gets untangled", "[optimize]") {
+  HexMesh g = test::grid_hex_mesh(3, 3, 3);
+  SurfaceMesh s = test::voxel_surface(test::voxel_box(3, 3, 3));
+  // interior vertex (1,1,1) pushed past its opposite neighbours: the hexes around it fold
+  const int v = (1 * 4 + 1) * 4 + 1;
+  REQUIRE(g.V.row(v) == Eigen::RowVector3d(1, 1, 1));
+  g.V.row(v) << 2.4, 2.3, 2.2;
+  REQUIRE(hex_quality(g, nullptr).inverted > 0);
+  OptimizeStats st;
+  HexMesh m = optimize_hexes(g, s, {}, &st);
+  CHECK(st.inverted_before > 0);
+  CHECK(st.untangle_sweeps > 0);
+  CHECK(st.inverted_after == 0);
+  HexQuality q = hex_quality(m, nullptr);
+  CHECK(q.inverted == 0);
+  CHECK(q.sj_min > 0.3);
+  CHECK(boundary_distance(m, s) < 1e-9);
+}
+
+TEST_CASE("optimize names a bad surface", "[optimize]") {
+  HexMesh g = test::grid_hex_mesh(1, 1, 1);
+  SurfaceMesh empty;
+  REQUIRE_THROWS_WITH(optimize_hexes(g, empty), Catch::Contains("no triangles"));
+}
