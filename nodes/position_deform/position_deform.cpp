@@ -1,7 +1,7 @@
 #include "nodes/position_deform/position_deform.h"
 
 #include <Eigen/Dense>
-#include <Eigen/SparseLU>
+#include <Eigen/IterativeLinearSolvers>
 #include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/parallel_reduce.h>
 
@@ -408,14 +408,25 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
         Eigen::SparseMatrix<double> Af(nFree, nFree);
         Af.setFromTriplets(tf.begin(), tf.end());
         Af.makeCompressed();
-        Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> lu;
-        lu.compute(Af);
-        if (lu.info() != Eigen::Success)
+        // Non-symmetric (mean value weights are not symmetric): BiCGSTAB with an incomplete LU
+        // preconditioner, started from the Poisson step's solution, which is already close.
+        Eigen::BiCGSTAB<Eigen::SparseMatrix<double, Eigen::RowMajor>, Eigen::IncompleteLUT<double>> solver;
+        Eigen::SparseMatrix<double, Eigen::RowMajor> Ar = Af;
+        solver.preconditioner().setDroptol(1e-4);
+        solver.preconditioner().setFillfactor(10);
+        solver.setTolerance(1e-12);
+        solver.setMaxIterations(2000);
+        solver.compute(Ar);
+        if (solver.info() != Eigen::Success)
           throw SolverError(input.source + ": mean value Laplace system (axis " + std::string(1, char('X' + a)) +
-                            ") could not be factored: " + lu.lastErrorMessage());
-        Eigen::VectorXd yf = lu.solve(b);
-        if (lu.info() != Eigen::Success || !yf.allFinite())
-          throw SolverError(input.source + ": mean value Laplace solve failed on axis " + std::string(1, char('X' + a)));
+                            ") could not be preconditioned");
+        Eigen::VectorXd guess(nFree);
+        for (int v = 0; v < nV; ++v)
+          if (vgroup[v] < 0) guess[var[v]] = y[var[v]];
+        Eigen::VectorXd yf = solver.solveWithGuess(b, guess);
+        if (!yf.allFinite() || solver.error() > 1e-8)
+          throw SolverError(input.source + ": mean value Laplace solve did not converge on axis " +
+                            std::string(1, char('X' + a)) + " (relative residual " + std::to_string(solver.error()) + ")");
         for (int v = 0; v < nV; ++v)
           if (vgroup[v] < 0) u[v] = yf[var[v]];
       }

@@ -1,5 +1,6 @@
 // Binding of the position-driven deformation (paper §5.2).
 #include "graph/node.h"
+#include "nodes/io/tetmesh_io.h"
 #include "nodes/position_deform/position_deform.h"
 
 namespace polyhex {
@@ -43,6 +44,18 @@ const bool registered = register_node(make_node<P>(
         ctx.warn(std::to_string(s.merged_same_axis_charts) + " same-axis charts share a vertex and were put on one plane");
       return make_artefact(std::move(m));
     }));
+
+// --save-all writes the PolyCube map as the tet mesh at its PolyCube positions.
+const bool saver_registered = [] {
+  Registry::instance().add_saver(artefact_name<PolyCubeMap>(), ".polycube.vtk", [](const Artefact& a, const std::filesystem::path& path) {
+    auto m = a.as<PolyCubeMap>();
+    TetMesh t;
+    t.V = m->U;
+    t.T = m->input->T;
+    write_tetmesh(t, path);
+  });
+  return true;
+}();
 
 }  // namespace
 }  // namespace polyhex
