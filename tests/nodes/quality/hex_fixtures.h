@@ -1,11 +1,9 @@
 /// @file hex_fixtures.h
 /// @brief Generated meshes for the quality and split tests: hex grids, structured tet boxes,
-/// perturbations, and minimal writers for the hexcheck.py cross-check.
+/// perturbations.
 #pragma once
 
 #include <Eigen/Geometry>
-#include <fstream>
-#include <iomanip>
 #include <random>
 #include <string>
 
@@ -90,31 +88,6 @@ inline SurfaceMesh boundary_surface(const HexMesh& m) {
   }
   s.source = "boundary";
   return s;
-}
-
-/// Legacy VTK ASCII (version 2.0, classic CELLS lines) of a hex mesh, full double precision.
-inline void write_vtk_ascii(const HexMesh& m, const std::string& path) {
-  std::ofstream o(path);
-  o << std::setprecision(17) << "# vtk DataFile Version 2.0\npolyhex test\nASCII\nDATASET UNSTRUCTURED_GRID\n";
-  o << "POINTS " << m.V.rows() << " double\n";
-  for (Eigen::Index i = 0; i < m.V.rows(); ++i) o << m.V(i, 0) << ' ' << m.V(i, 1) << ' ' << m.V(i, 2) << '\n';
-  o << "CELLS " << m.H.rows() << ' ' << 9 * m.H.rows() << '\n';
-  for (Eigen::Index h = 0; h < m.H.rows(); ++h) {
-    o << 8;
-    for (int k = 0; k < 8; ++k) o << ' ' << m.H(h, k);
-    o << '\n';
-  }
-  o << "CELL_TYPES " << m.H.rows() << '\n';
-  for (Eigen::Index h = 0; h < m.H.rows(); ++h) o << "12\n";
-}
-
-/// Wavefront OBJ of a triangle surface, full double precision.
-inline void write_obj(const SurfaceMesh& s, const std::string& path) {
-  std::ofstream o(path);
-  o << std::setprecision(17);
-  for (Eigen::Index i = 0; i < s.V.rows(); ++i) o << "v " << s.V(i, 0) << ' ' << s.V(i, 1) << ' ' << s.V(i, 2) << '\n';
-  for (Eigen::Index f = 0; f < s.F.rows(); ++f)
-    o << "f " << s.F(f, 0) + 1 << ' ' << s.F(f, 1) + 1 << ' ' << s.F(f, 2) + 1 << '\n';
 }
 
 }  // namespace polyhex::test

@@ -7,6 +7,8 @@
 #include <unistd.h>
 
 #include "nodes/hex_from_tets/split.h"
+#include "nodes/io/hexmesh_io.h"
+#include "nodes/io/surface_io.h"
 #include "nodes/quality/quality.h"
 #include "nodes/quality/quality_json.h"
 #include "tests/nodes/quality/hex_fixtures.h"
@@ -51,12 +53,16 @@ struct TempDir {
   }
 };
 
-void compare(const std::string& name, const HexMesh& mesh, const SurfaceMesh& surface, const TempDir& dir) {
-  INFO("mesh " << name);
-  const std::string vtk = (dir.path / (name + ".vtk")).string(), obj = (dir.path / (name + ".obj")).string();
-  write_vtk_ascii(mesh, vtk);
-  write_obj(surface, obj);
-  const auto [out, status] = run(kPython + " " + kHexcheck.string() + " " + vtk + " --surface " + obj + " --json --samples " +
+// Writes the mesh with the project's writers (file name `name`, format `format` of write_hexmesh),
+// runs hexcheck.py on the files and compares its figures with hex_quality on the mesh in memory:
+// the writers print shortest round-trip decimals or raw doubles, so both see the same numbers.
+void compare(const std::string& name, const std::string& format, const HexMesh& mesh, const SurfaceMesh& surface,
+             const TempDir& dir) {
+  INFO("mesh " << name << " (" << format << ")");
+  const std::string file = (dir.path / name).string(), obj = (dir.path / (name + ".obj")).string();
+  write_hexmesh(mesh, file, format);
+  write_surface(surface, obj);
+  const auto [out, status] = run(kPython + " " + kHexcheck.string() + " " + file + " --surface " + obj + " --json --samples " +
                                   std::to_string(kSamples));
   INFO("hexcheck output: " << out);
   REQUIRE(status == 0);
@@ -109,13 +115,13 @@ TEST_CASE("quality agrees with hexcheck.py on varied meshes", "[quality][hexchec
   HexMesh grid = grid_hex_mesh(8, 7, 6, 0.5);
   const SurfaceMesh box = boundary_surface(grid);
   perturb(grid.V, 0.16, 5);
-  compare("perturbed_grid", grid, box, dir);
+  compare("perturbed_grid.vtk", "vtk", grid, box, dir);
 
   // The baseline split of a perturbed box: all-irregular, valid hexes.
   TetMesh tets = box_tet_mesh(5, 4, 4, 0.5);
   perturb(tets.V, 0.06, 9);
   const HexMesh split = split_tets_to_hexes(tets);
-  compare("split_box", split, boundary_surface(grid_hex_mesh(5, 4, 4, 0.5)), dir);
+  compare("split_box.vtk", "vtk_binary", split, boundary_surface(grid_hex_mesh(5, 4, 4, 0.5)), dir);
 
   // A broken mesh: a degenerate hex (an interior edge collapsed: hexcheck's distances would be NaN
   // for a degenerate boundary triangle), a hex used three times, an unused vertex.
@@ -127,5 +133,5 @@ TEST_CASE("quality agrees with hexcheck.py on varied meshes", "[quality][hexchec
   broken.H.conservativeResize(broken.H.rows() + 2, 8);
   broken.H.row(broken.H.rows() - 1) = broken.H.row(5);
   broken.H.row(broken.H.rows() - 2) = broken.H.row(5);
-  compare("broken", broken, broken_box, dir);
+  compare("broken.mesh", "mesh", broken, broken_box, dir);
 }

@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include <chrono>
 #include <cmath>
 #include <random>
 #include <set>
@@ -342,4 +343,20 @@ TEST_CASE("quality node: a sink with hexcheck's keys as metrics", "[quality]") {
     REQUIRE(ctx.warnings.size() == 1);
     CHECK_THAT(ctx.warnings[0], Contains("of 27 hexes are inverted"));
   }
+}
+
+// Timing on a mesh of the size the paper produces; hidden ([.]): run it with "[quality-bench]".
+TEST_CASE("quality: timing on 100k hexes and a 50k-triangle surface", "[.][quality-bench]") {
+  HexMesh g = grid_hex_mesh(46, 46, 48, 1.0 / 46);
+  perturb(g.V, 0.1 / 46, 1);
+  const SurfaceMesh s = boundary_surface(grid_hex_mesh(65, 65, 65, 48.0 / 46 / 65));
+  REQUIRE(g.H.rows() == 101568);
+  REQUIRE(s.F.rows() == 50700);
+  const auto t0 = std::chrono::steady_clock::now();
+  const HexQuality q = measure(g, &s, 100000);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  WARN("hex_quality: " << q.hexes << " hexes, " << s.F.rows() << " surface triangles, 100000 samples per side: "
+                       << seconds << " s");
+  CHECK(q.inverted == 0);
+  CHECK(q.hausdorff_max < 0.05);
 }
