@@ -1,0 +1,132 @@
+#!/usr/bin/env python3
+"""Meshes every model of ../shared/data/surfaces (except girl.off, which self-intersects) with a polyhex
+config and writes docs/RESULTS.md: per model the hex quality, the PolyCube stages' figures and the time
+per stage, beside the 2011 paper's Table 1 and the best published PolyCube meshes (figures from
+../shared/data/README.md). Each written mesh is cross-checked with ../shared/tools/hexcheck.py.
+
+  tools/make_results.py [--polyhex build/polyhex] [--config configs/polycube.json] [--out results-out]
+                        [--models bunny fandisk ...] [--doc docs/RESULTS.md] [--threads 2] [--no-hexcheck]
+"""
+import argparse, json, os, subprocess, sys, time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+SHARED = ROOT.parent / "shared"
+
+# The 2011 paper's Table 1: (hexes, avg SJ, min SJ, Hausdorff mean x1e-3, Hausdorff max x1e-3).
+PAPER = {"casting": (21e3, .845, .195, 1.21, 5.67), "fandisk": (45e3, .959, .251, 1.23, 6.96),
+         "bumpy_torus": (35e3, .891, .270, 1.21, 7.86), "fertility": (20e3, .911, .196, 1.06, 4.01),
+         "bunny": (81e3, .930, .138, 1.19, 4.01), "carter": (21e3, .823, .177, 1.19, 6.58),
+         "femur": (13e3, .930, .334, 1.21, 9.14), "hand": (12e3, .928, .270, .833, 11.5),
+         "dragon": (173e3, .882, .002, .694, 28.9), "rockerarm": (18e3, .899, .226, 1.16, 3.95),
+         "bimba": (44e3, .905, .257, 1.23, 12.8), "girl": (194e3, .925, .235, .481, 13.2)}
+# Best published PolyCube mesh per model in ../shared/data/README.md: (method, min SJ, avg SJ).
+BEST = {"bumpy_torus": ("Huang 2014", .335, .929), "casting": ("Gregson 2011", .195, .845),
+        "fertility": ("Fang 2016", .396, .930), "bunny": ("Huang 2014", .382, .926),
+        "rockerarm": ("Fu 2016", .477, .924), "kitten": ("Fang 2016", .435, .922),
+        "joint": ("Fang 2016", .778, .984), "chinese_lion": ("Fang 2016", .289, .910),
+        "greek_sculpture": ("Fu 2016", .250, .901), "femur": ("Cherchi 2016", .544, .959),
+        "block": ("Cherchi 2016", .179, .955), "dragon": ("Livesu 2015", .102, .905)}
+
+
+def run_model(args, surf, out):
+    cmd = [args.polyhex, "run", args.config, "--input", str(surf), "--out", str(out)]
+    if args.threads:
+        cmd += ["--threads", str(args.threads)]
+    for s in args.set or []:
+        cmd += ["--set", s]
+    t0 = time.time()
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    wall = time.time() - t0
+    rep = None
+    if (out / "report.json").exists():
+        rep = json.loads((out / "report.json").read_text())
+    return p.returncode, wall, rep, p.stderr.strip().splitlines()[-3:]
+
+
+def hexcheck(mesh, surf):
+    p = subprocess.run(["/usr/bin/python3", str(SHARED / "tools" / "hexcheck.py"), str(mesh), "--surface", str(surf), "--json"],
+                       capture_output=True, text=True)
+    return json.loads(p.stdout) if p.returncode == 0 else None
+
+
+def fmt(x, spec=".3f"):
+    return "–" if x is None else format(x, spec)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--polyhex", default=str(ROOT / "build" / "polyhex"))
+    ap.add_argument("--config", default=str(ROOT / "configs" / "polycube.json"))
+    ap.add_argument("--out", default=str(ROOT / "results-out"))
+    ap.add_argument("--models", nargs="*")
+    ap.add_argument("--doc", default=str(ROOT / "docs" / "RESULTS.md"))
+    ap.add_argument("--threads", type=int, default=0)
+    ap.add_argument("--set", action="append", help="id.param=value passed to every run")
+    ap.add_argument("--no-hexcheck", action="store_true")
+    args = ap.parse_args()
+
+    surfaces = sorted(p for p in (SHARED / "data" / "surfaces").iterdir() if p.stem != "girl")
+    if args.models:
+        surfaces = [p for p in surfaces if p.stem in args.models]
+    rows, stage_rows, check_rows = [], [], []
+    for surf in surfaces:
+        name = surf.stem
+        out = Path(args.out) / name
+        code, wall, rep, tail = run_model(args, surf, out)
+        print(f"{name}: exit {code}, {wall:.1f} s", file=sys.stderr)
+        if rep is None or rep.get("status") != "ok":
+            err = (rep or {}).get("error", " ".join(tail))
+            rows.append(f"| {name} | failed: {err.replace('|', '/')[:160]} |" + " |" * 11)
+            continue
+        n = rep["nodes"]
+        q = n.get("quality", {}).get("metrics", {})
+        m = lambda node, key: n.get(node, {}).get("metrics", {}).get(key)
+        align = m("rotate", "alignment")
+        paper = PAPER.get(name)
+        best = BEST.get(name)
+        rows.append("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |".format(
+            name, m("tets", "tets"), m("segment", "charts"), q.get("hexes"), q.get("inverted"),
+            fmt(q.get("sj_min")), fmt(q.get("sj_avg")), fmt(q.get("irregular_pct"), ".1f"),
+            fmt(q.get("hausdorff_mean", 0) * 1e3, ".2f") + " / " + fmt(q.get("hausdorff_max", 0) * 1e3, ".1f"),
+            f"{rep['seconds']:.1f}",
+            "–" if paper is None else f"{paper[2]:.3f} / {paper[1]:.3f}",
+            "–" if best is None else f"{best[1]:.3f} / {best[2]:.3f} ({best[0]})"))
+        stage_rows.append("| {} | {} | {} | {} | {} | {} | {} | {} |".format(
+            name, fmt(align[-1] if align else None), m("segment", "charts"), m("segment", "corners"),
+            f"{m('segment', 'splits_multi_orientation')}/{m('segment', 'splits_wedge')}", m("polycube", "inverted_tets"),
+            fmt(m("polycube", "distortion")),
+            " ".join(f"{k}={v['seconds']:.1f}" for k, v in n.items() if v.get("ran"))))
+        mesh = out / "hex.vtk"
+        if not args.no_hexcheck and mesh.exists():
+            hc = hexcheck(mesh, surf)
+            if hc:
+                check_rows.append("| {} | {} / {} | {:.2e} | {:.2e} | {} / {} | {:.2f} / {:.2f} |".format(
+                    name, fmt(hc["sj_min"], ".6f"), fmt(q.get("sj_min"), ".6f"), abs(hc["sj_min"] - q["sj_min"]),
+                    abs(hc["sj_avg"] - q["sj_avg"]), hc["inverted"], q["inverted"],
+                    hc["hausdorff_mean"] * 1e3, q["hausdorff_mean"] * 1e3))
+
+    doc = ["# Results on the shared models", "",
+           f"Generated by `tools/make_results.py --config {os.path.relpath(args.config, ROOT)}` on {time.strftime('%Y-%m-%d')}"
+           f" ({os.cpu_count()} cores; the machine is shared, so times are indicative).", "",
+           "Hex quality as `../shared/tools/hexcheck.py` defines it (Verdict scaled Jacobian with centre term; irregular ="
+           " interior edge valence != 6 or boundary vertex with != 4 boundary quads; Hausdorff relative to the input's bbox"
+           " diagonal, in 1e-3). `paper` is the 2011 paper's Table 1 (min / avg SJ), `best` the best published PolyCube mesh"
+           " listed in `../shared/data/README.md` (min / avg SJ).", "",
+           "| model | tets | charts | hexes | inverted | SJ min | SJ avg | irregular % | Hausdorff mean / max (1e-3) | time s | paper min / avg | best min / avg |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|"] + rows + [
+           "", "## PolyCube stages", "",
+           "| model | alignment after §4 | charts | corners | splits (multi-orientation / wedge) | inverted tets of the map | map distortion | seconds per stage |",
+           "|---|---|---|---|---|---|---|---|"] + stage_rows + [
+           "", "## Cross-check with hexcheck.py", "",
+           "| model | SJ min hexcheck / ours | SJ min diff | SJ avg diff | inverted hexcheck / ours | Hausdorff mean hexcheck / ours (1e-3) |",
+           "|---|---|---|---|---|---|"] + check_rows + [""]
+    Path(args.doc).parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(args.doc + ".tmp")
+    tmp.write_text("\n".join(doc))
+    tmp.replace(args.doc)
+    print(f"wrote {args.doc}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()
