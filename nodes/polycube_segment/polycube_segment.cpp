@@ -790,6 +790,30 @@ void clean_up(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeS
   }
 }
 
+/// Extension of §5.1 (param final_cleanup): after the splits, small charts (area below
+/// p.small_chart_area of the surface) with fewer than 4 neighbours are removed by flood fill;
+/// counted in removed_small.
+void remove_small_invalid(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p,
+                          State& st) {
+  for (int round = 0; round < 16; ++round) {
+    Structure S = analyse(s, st.label);
+    std::vector<double> area(S.n, 0);
+    for (int t = 0; t < s.nf(); ++t) area[S.chart[t]] += s.area[t];
+    std::vector<char> remove(S.n, 0);
+    int removed = 0;
+    for (int c = 0; c < S.n; ++c)
+      if (S.n > 1 && S.adj[c].size() < 4 && area[c] < p.small_chart_area * s.total_area) {
+        remove[c] = 1;
+        ++removed;
+      }
+    if (removed == 0) return;
+    st.removed_small += removed;
+    for (int t = 0; t < s.nf(); ++t)
+      if (remove[S.chart[t]]) st.label[t] = -1;
+    flood_fill(s, normal, st.label);
+  }
+}
+
 /// One full §5.1 run with a given number of normal-smoothing passes.
 PolyCubeSegmentation segment_once(const Surface& s, const PolyCubeSegmentParams& p, int smoothing) {
   std::vector<Vec3> normal = smoothed_normals(s, smoothing);
@@ -801,6 +825,7 @@ PolyCubeSegmentation segment_once(const Surface& s, const PolyCubeSegmentParams&
   const double h = p.hex_edge_length * s.diag;
   if (p.split_multi_orientation) split_multi_orientation(s, normal, h, p.max_splits, st);
   if (p.split_wedges) split_wedges(s, normal, p, st);
+  if (p.final_cleanup) remove_small_invalid(s, normal, p, st);
   PolyCubeSegmentation r = make_result(s, st);
   r.smoothing_iterations = smoothing;
   return r;

@@ -23,6 +23,7 @@ struct PolyCubeSegmentParams {
   double wedge_min_severity = 1e-3;    ///< wedges whose triangle area is below this fraction of bbox diagonal^2 are left alone
   int max_cut_candidates = 200;        ///< cut candidates tested per wedge, cheapest first
   int max_splits = 32;                 ///< upper bound on separating charts of each kind
+  bool final_cleanup = true;           ///< after the splits, remove small charts with < 4 neighbours by flood fill (extension of §5.1)
   int fallback_retries = 2;            ///< if invalid, retry with doubled smoothing this many times (reported as a warning)
   bool allow_invalid = false;          ///< pass an invalid structure on with a warning instead of failing
   bool save_surface = false;           ///< write <id>.charts.vtk (also written with --save-all)

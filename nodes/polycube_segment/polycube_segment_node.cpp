@@ -40,6 +40,7 @@ const bool registered = register_node(make_node<P>(
         .add("wedge_min_severity", &P::wedge_min_severity, "minimum wedge area, fraction of bbox diagonal^2", 0, 1)
         .add("max_cut_candidates", &P::max_cut_candidates, "cut candidates tested per wedge", 1, 100000)
         .add("max_splits", &P::max_splits, "maximum separating charts of each kind", 0, 10000)
+        .add("final_cleanup", &P::final_cleanup, "after the splits, remove small charts with < 4 neighbours")
         .add("fallback_retries", &P::fallback_retries, "retries with doubled smoothing when invalid", 0, 10)
         .add("allow_invalid", &P::allow_invalid, "pass an invalid structure on with a warning")
         .add("save_surface", &P::save_surface, "write <id>.charts.vtk"),

@@ -1,0 +1,53 @@
+// [segment][shared]: the real pipeline (tetrahedralize -> rotation_deform -> polycube_segment) on
+// ten fast models of ../shared/data/surfaces gives valid PolyCube structures (paper §5.1, "for all inputs
+// tested, these two splitting rules have produced valid PolyCube structures").
+#include <catch2/catch.hpp>
+
+#include <chrono>
+#include <filesystem>
+
+#include "nodes/io/surface_io.h"
+#include "nodes/polycube_segment/polycube_segment.h"
+#include "nodes/rotation_deform/rotation_deform.h"
+#include "nodes/tetrahedralize/tetgen.h"
+
+using namespace polyhex;
+
+TEST_CASE("shared surfaces: tetrahedralize, rotation_deform, polycube_segment give valid structures",
+          "[segment][shared]") {
+  const std::filesystem::path dir = std::filesystem::path(POLYHEX_SHARED_DIR) / "data" / "surfaces";
+  if (!std::filesystem::is_directory(dir)) {
+    WARN("skipped: " << dir << " missing");
+    SUCCEED();
+    return;
+  }
+  // The fast models (CAD and small scans); the whole folder takes minutes and is measured outside
+  // the test suite (see the report of issue 4).
+  const char* models[] = {"8-connected.stl",        "cuboid_screw_thread.stl", "cuboid_torus_with_step.stl",
+                          "cuboid_tray_with_step.stl", "in-volume_knot.stl",    "in-volume_twist.stl",
+                          "mambo_B0.obj",           "mambo_S3.off",            "fandisk.off",
+                          "kitten.off"};
+  std::vector<std::filesystem::path> files;
+  for (const char* m : models) files.push_back(dir / m);
+  TetgenParams tp;
+  tp.edge_length = 0.06;  // coarse, so 28 models run in about a minute
+  for (auto& f : files) {
+    auto t0 = std::chrono::steady_clock::now();
+    REQUIRE(std::filesystem::exists(f));
+    TetMesh tets = tetrahedralize(read_surface(f), tp);
+    TetMesh deformed = rotation_deform(tets, RotationDeformParams{}).mesh;
+    PolyCubeSegmentation s = segment_polycube(deformed);
+    double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    INFO(f.filename().string() << ": " << (s.problems.empty() ? "" : s.problems.front()));
+    CHECK(s.valid);
+    CHECK(s.charts.size() >= 6);
+    CHECK(s.corners.size() >= 8);
+    if (s.valid)
+      for (auto& c : s.corners) CHECK(c.valence == 3);
+    WARN(f.filename().string() << ": " << tets.T.rows() << " tets, charts " << s.charts.size() << ", corners "
+                               << s.corners.size() << ", edges " << s.edges.size() << ", splits multi/wedge "
+                               << s.splits_multi_orientation << "/" << s.splits_wedge << ", removed small "
+                               << s.removed_small << ", smoothing " << s.smoothing_iterations << ", valid " << s.valid
+                               << ", " << seconds << " s");
+  }
+}
