@@ -12,10 +12,11 @@
 ///  (b) max-min: move each vertex whose incident hexes are below `target_sj` to maximise the minimum
 ///      scaled Jacobian (Verdict, centre term included) of its incident hexes: gradient of a soft minimum,
 ///      backtracking line search, plus the average of its edge neighbours as a candidate;
-///  (c) shape improvement: every vertex descends the same Winslow energy (ε = 0 limit) — coordinate descent
-///      of one global energy.
+///  (c) shape improvement, alternating sweeps: every vertex descends the same Winslow energy (ε -> 0) —
+///      coordinate descent of one global energy — or ascends the sum of its hexes' scaled Jacobians (the
+///      average the report measures).
 /// A move is accepted only if it does not lower the minimum scaled Jacobian of the vertex's hexes and
-/// inverts none of them (in (a): it lowers the energy and inverts no further corner). Boundary vertices
+/// inverts none of them (in (c) nor their sum; in (a): it lowers the energy and inverts no further corner). Boundary vertices
 /// (on boundary quads) move along the tangent plane of the surface and are projected back onto it
 /// (closest point, AABB tree) after every move.
 #pragma once
@@ -31,6 +32,7 @@ struct OptimizeParams {
   int iterations = 30;             ///< max max-min sweeps, [0, 10000]
   int shape_iterations = 10;       ///< global shape-improvement sweeps, [0, 10000]
   double target_sj = 0.8;          ///< max-min sweeps touch vertices with an incident hex below this SJ, [0, 1]
+  double shape_target_sj = 0.95;   ///< shape sweeps touch vertices with an incident hex below this SJ, [0, 1]
   double time_budget = 60.0;       ///< seconds for the whole stage (checked between colour classes), [0, 1e6]
   bool move_boundary = true;       ///< boundary vertices may slide on the surface
 };

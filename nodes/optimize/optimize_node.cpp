@@ -17,6 +17,8 @@ const bool registered = register_node(make_node<P>(
         .add("iterations", &P::iterations, "max max-min scaled Jacobian sweeps", 0, 10000)
         .add("shape_iterations", &P::shape_iterations, "global shape-improvement sweeps", 0, 10000)
         .add("target_sj", &P::target_sj, "max-min sweeps move vertices of hexes below this scaled Jacobian", 0.0, 1.0)
+        .add("shape_target_sj", &P::shape_target_sj, "shape sweeps move vertices of hexes below this scaled Jacobian",
+             0.0, 1.0)
         .add("time_budget", &P::time_budget, "seconds for the whole stage", 0.0, 1e6)
         .add("move_boundary", &P::move_boundary, "boundary vertices may slide on the surface"),
     {{"hexes", artefact_name<HexMesh>()}, {"surface", artefact_name<SurfaceMesh>()}}, artefact_name<HexMesh>(),

@@ -121,7 +121,7 @@ TEST_CASE("chain figures on built-in shapes (bench, run on demand)", "[.hexbench
   }
 }
 
-TEST_CASE("chain figures on shared surfaces", "[shared][hex]") {
+TEST_CASE("chain figures on shared surfaces", "[shared][hex_shared]") {
   const std::filesystem::path dir = std::filesystem::path(POLYHEX_SHARED_DIR) / "data" / "surfaces";
   if (!std::filesystem::exists(dir)) {
     WARN("no shared data at " << dir << ": skipped");
