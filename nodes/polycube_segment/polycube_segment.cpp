@@ -762,11 +762,14 @@ PolyCubeSegmentation make_result(const Surface& s, const State& st) {
   return r;
 }
 
-/// §5.1 clean-up: straighten chart boundaries, remove small charts bounded by at most
-/// p.small_chart_edges edges (their triangles are relabelled by flood fill), repeat until stable.
-void clean_up(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p, State& st) {
+/// Removes the small charts (area below p.small_chart_area of the surface) that `bad` selects,
+/// relabelling them by flood fill; repeats until none is selected. `straighten_first` straightens
+/// before each round. Counts the removed charts in st.removed_small.
+void remove_small_charts(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p,
+                         State& st, bool straighten_first,
+                         const std::function<bool(const Structure&, int chart, int edges)>& bad) {
   for (int round = 0; round < 16; ++round) {
-    straighten(s, st.label);
+    if (straighten_first) straighten(s, st.label);
     Structure S = analyse(s, st.label);
     std::vector<int> edge_count(S.n, 0);
     std::vector<double> area(S.n, 0);
@@ -778,7 +781,7 @@ void clean_up(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeS
     std::vector<char> remove(S.n, 0);
     int removed = 0;
     for (int c = 0; c < S.n; ++c)
-      if (S.n > 1 && edge_count[c] <= p.small_chart_edges && area[c] < p.small_chart_area * s.total_area) {
+      if (S.n > 1 && area[c] < p.small_chart_area * s.total_area && bad(S, c, edge_count[c])) {
         remove[c] = 1;
         ++removed;
       }
@@ -790,28 +793,19 @@ void clean_up(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeS
   }
 }
 
-/// Extension of §5.1 (param final_cleanup): after the splits, small charts (area below
-/// p.small_chart_area of the surface) with fewer than 4 neighbours are removed by flood fill;
-/// counted in removed_small.
+/// §5.1 clean-up: straighten chart boundaries, remove small charts bounded by at most
+/// p.small_chart_edges edges (their triangles are relabelled by flood fill), repeat until stable.
+void clean_up(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p, State& st) {
+  remove_small_charts(s, normal, p, st, true,
+                      [&](const Structure&, int, int edges) { return edges <= p.small_chart_edges; });
+}
+
+/// Extension of §5.1 (param final_cleanup): after the splits, small charts with fewer than 4
+/// neighbours are removed by flood fill too.
 void remove_small_invalid(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p,
                           State& st) {
-  for (int round = 0; round < 16; ++round) {
-    Structure S = analyse(s, st.label);
-    std::vector<double> area(S.n, 0);
-    for (int t = 0; t < s.nf(); ++t) area[S.chart[t]] += s.area[t];
-    std::vector<char> remove(S.n, 0);
-    int removed = 0;
-    for (int c = 0; c < S.n; ++c)
-      if (S.n > 1 && S.adj[c].size() < 4 && area[c] < p.small_chart_area * s.total_area) {
-        remove[c] = 1;
-        ++removed;
-      }
-    if (removed == 0) return;
-    st.removed_small += removed;
-    for (int t = 0; t < s.nf(); ++t)
-      if (remove[S.chart[t]]) st.label[t] = -1;
-    flood_fill(s, normal, st.label);
-  }
+  remove_small_charts(s, normal, p, st, false,
+                      [](const Structure& S, int c, int) { return S.adj[c].size() < 4; });
 }
 
 /// One full §5.1 run with a given number of normal-smoothing passes.
