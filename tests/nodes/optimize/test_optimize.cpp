@@ -3,6 +3,7 @@
 
 #include <random>
 
+#include "graph/node.h"
 #include "nodes/optimize/optimize.h"
 #include "nodes/quality/quality.h"
 #include "nodes/quality/triangle_tree.h"
@@ -102,4 +103,27 @@ TEST_CASE("optimize names a bad surface", "[optimize]") {
   HexMesh g = test::grid_hex_mesh(1, 1, 1);
   SurfaceMesh empty;
   REQUIRE_THROWS_WITH(optimize_hexes(g, empty), Catch::Contains("no triangles"));
+}
+
+TEST_CASE("the optimize node never hands out an inverted hex silently", "[optimize]") {
+  // no sweep allowed: the inverted hexes stay, and the node says so in its metrics and warnings
+  const NodeSpec* spec = Registry::instance().find("optimize/sj");
+  REQUIRE(spec != nullptr);
+  REQUIRE(spec->inputs.size() == 2);
+  CHECK(spec->inputs[0].name == "hexes");
+  CHECK(spec->inputs[1].name == "surface");
+  CHECK_FALSE(spec->inputs[1].optional);
+  HexMesh g = test::grid_hex_mesh(3, 3, 3);
+  g.V.row((1 * 4 + 1) * 4 + 1) << 2.4, 2.3, 2.2;
+  Inputs in;
+  in.items = {make_artefact(g), make_artefact(test::voxel_surface(test::voxel_box(3, 3, 3)))};
+  NodeContext ctx;
+  ctx.id = "opt";
+  json params = spec->check_params(json{{"untangle_iterations", 0}, {"iterations", 0}, {"shape_iterations", 0}}, "opt");
+  Artefact out = spec->run(params, in, ctx);
+  CHECK(out.as<HexMesh>()->H.rows() == 27);
+  CHECK(ctx.metrics["inverted"].get<long>() > 0);
+  REQUIRE(ctx.warnings.size() == 1);
+  CHECK_THAT(ctx.warnings[0], Catch::Contains("hexes are still inverted after optimization"));
+  REQUIRE_THROWS_WITH(spec->check_params(json{{"target_sj", 2.0}}, "opt"), Catch::Contains("out of range"));
 }
