@@ -3,7 +3,6 @@
 #include <Eigen/Dense>
 #include <Eigen/IterativeLinearSolvers>
 #include <oneapi/tbb/parallel_for.h>
-#include <oneapi/tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <chrono>
@@ -438,36 +437,30 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
       if (vgroup[v] >= 0) st.planarity_error = std::max(st.planarity_error, std::abs(out.U(v, a) - k[vgroup[v]] * h) / diag);
   }
 
-  // Inverted tets and distortion of input -> PolyCube.
-  struct Acc {
-    int inverted = 0, n = 0;
-    double sum = 0, max = 0;
-  };
-  Acc acc = oneapi::tbb::parallel_reduce(
-      oneapi::tbb::blocked_range<Eigen::Index>(0, input.T.rows()), Acc{},
-      [&](const oneapi::tbb::blocked_range<Eigen::Index>& r, Acc s) {
-        for (Eigen::Index t = r.begin(); t != r.end(); ++t) {
-          Eigen::Vector3d a = input.V.row(input.T(t, 0)), b = input.V.row(input.T(t, 1)), c = input.V.row(input.T(t, 2)),
-                          d = input.V.row(input.T(t, 3));
-          Eigen::Vector3d A = out.U.row(input.T(t, 0)), B = out.U.row(input.T(t, 1)), C = out.U.row(input.T(t, 2)),
-                          D = out.U.row(input.T(t, 3));
-          double vol = (B - A).cross(C - A).dot(D - A);
-          if (!(vol > 0)) {
-            ++s.inverted;
-            continue;
-          }
-          double dist = conformal_distortion(a, b, c, d, A, B, C, D);
-          if (std::isfinite(dist)) s.sum += dist, s.max = std::max(s.max, dist), ++s.n;
-        }
-        return s;
-      },
-      [](Acc x, const Acc& y) {
-        x.inverted += y.inverted, x.n += y.n, x.sum += y.sum, x.max = std::max(x.max, y.max);
-        return x;
-      });
-  st.inverted_tets = acc.inverted;
-  st.distortion = acc.n ? acc.sum / acc.n : 0;
-  st.distortion_max = acc.max;
+  // Inverted tets and distortion of input -> PolyCube. A few near-degenerate tets have distortions of
+  // 1e10 and more, so the mean says nothing: report the median, the 99th percentile and the max.
+  std::vector<double> dist(size_t(input.T.rows()), -1.0);
+  oneapi::tbb::parallel_for(Eigen::Index(0), input.T.rows(), [&](Eigen::Index t) {
+    Eigen::Vector3d q[4], Q[4];
+    for (int k = 0; k < 4; ++k) q[k] = input.V.row(input.T(t, k)), Q[k] = out.U.row(input.T(t, k));
+    if ((Q[1] - Q[0]).cross(Q[2] - Q[0]).dot(Q[3] - Q[0]) > 0)
+      dist[size_t(t)] = conformal_distortion(q[0], q[1], q[2], q[3], Q[0], Q[1], Q[2], Q[3]);
+  });
+  std::vector<double> ok;
+  ok.reserve(dist.size());
+  for (double d : dist)
+    if (d < 0) ++st.inverted_tets;
+    else if (std::isfinite(d)) ok.push_back(d);
+  if (!ok.empty()) {
+    auto at = [&](double f) {
+      auto it = ok.begin() + std::ptrdiff_t(f * double(ok.size() - 1));
+      std::nth_element(ok.begin(), it, ok.end());
+      return *it;
+    };
+    st.distortion = at(0.5);
+    st.distortion_p99 = at(0.99);
+    st.distortion_max = *std::max_element(ok.begin(), ok.end());
+  }
   if (stats_out) *stats_out = st;
   return out;
 }

@@ -48,7 +48,8 @@ struct PositionDeformStats {
   int merged_same_axis_charts = 0;      ///< same-axis charts sharing a vertex, forced onto one plane
   double chart_coordinates_rounded_max_shift = 0;  ///< max |c − k h| / h over charts
   int inverted_tets = 0;                ///< tets of the PolyCube map with signed volume <= 0 (expected at concave edges, Fig. 9)
-  double distortion = 0;                ///< mean conformal distortion ||J||_F ||J^-1||_F / 3 (input -> PolyCube) of non-inverted tets
+  double distortion = 0;                ///< median conformal distortion ||J||_F ||J^-1||_F / 3 (input -> PolyCube) of non-inverted tets
+  double distortion_p99 = 0;            ///< its 99th percentile
   double distortion_max = 0;
   double planarity_error = 0;           ///< max distance of a chart vertex from its plane / bbox diagonal (0 by construction)
   double seconds_poisson = 0, seconds_final = 0;

@@ -33,6 +33,7 @@ const bool registered = register_node(make_node<P>(
       j["chart_coordinates_rounded_max_shift"] = s.chart_coordinates_rounded_max_shift;
       j["inverted_tets"] = s.inverted_tets;
       j["distortion"] = s.distortion;
+      j["distortion_p99"] = s.distortion_p99;
       j["distortion_max"] = s.distortion_max;
       j["planarity_error"] = s.planarity_error;
       j["edge_length_abs"] = m.edge_length;

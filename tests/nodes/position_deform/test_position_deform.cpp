@@ -73,6 +73,7 @@ TEST_CASE("an axis-aligned box maps onto itself: MVC Laplace has linear precisio
   double err = (r.map.U - r.tets->V).cwiseAbs().maxCoeff();
   CHECK(err < 1e-8);
   CHECK(r.stats.distortion == Approx(1.0).epsilon(1e-6));
+  CHECK(r.stats.distortion_max == Approx(1.0).epsilon(1e-6));
   CHECK(r.stats.chart_coordinates_rounded_max_shift < 1e-6);
 }
 
