@@ -45,9 +45,27 @@ std::string config(const std::string& name) { return std::string(POLYHEX_SOURCE_
 
 }  // namespace
 
-TEST_CASE("cli: the default config runs on a built-in shape; check agrees with the report", "[cli]") {
+TEST_CASE("cli: the default (PolyCube) config meshes a built-in shape with no inverted hex", "[cli]") {
+  fs::path out = temp_dir("polycube");
+  Result r = run("run " + config("default.json") + " --out " + out.string() +
+                 " --set tets.edge_length=0.04 --set segment.hex_edge_length=0.03 --set polycube.edge_length=0.03 --threads 2");
+  INFO(r.output);
+  REQUIRE(r.code == 0);
+  std::ifstream in(out / "report.json");
+  json rep = json::parse(in);
+  const json& q = rep["nodes"]["quality"]["metrics"];
+  CHECK(q["inverted"] == 0);
+  CHECK(q["hexes"].get<int>() > 1000);
+  CHECK(q["sj_min"].get<double>() > 0.2);
+  CHECK(q["irregular_pct"].get<double>() < 10.0);  // the split baseline is ~90 %
+  CHECK(q["nonmanifold_boundary_edges"] == 0);
+  CHECK(rep["nodes"]["rotate"]["metrics"]["factorizations"] == 2);
+  CHECK(rep["nodes"]["segment"]["metrics"]["valid"] == true);
+}
+
+TEST_CASE("cli: the baseline config runs on a built-in shape; check agrees with the report", "[cli]") {
   fs::path out = temp_dir("default");
-  Result r = run("run " + config("default.json") + " --out " + out.string() + " --set tets.edge_length=0.08 --threads 2");
+  Result r = run("run " + config("baseline.json") + " --out " + out.string() + " --set tets.edge_length=0.08 --threads 2");
   INFO(r.output);
   REQUIRE(r.code == 0);
   std::ifstream in(out / "report.json");
@@ -73,7 +91,7 @@ TEST_CASE("cli: the default config runs on a built-in shape; check agrees with t
 TEST_CASE("cli: bad input names the file and the node, exits non-zero, writes no mesh", "[cli]") {
   fs::path out = temp_dir("bad");
   std::ofstream(out / "open.off") << "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
-  Result r = run("run " + config("default.json") + " --input " + (out / "open.off").string() + " --out " + (out / "o").string());
+  Result r = run("run " + config("baseline.json") + " --input " + (out / "open.off").string() + " --out " + (out / "o").string());
   INFO(r.output);
   CHECK(r.code == 1);
   CHECK_THAT(r.output, Contains("node `surface` (`read_surface/default`)") && Contains("open.off"));
@@ -82,7 +100,7 @@ TEST_CASE("cli: bad input names the file and the node, exits non-zero, writes no
   json rep = json::parse(in);
   CHECK(rep["status"] == "error");
 
-  Result m = run("run " + config("default.json") + " --input " + (out / "missing.stl").string() + " --out " + (out / "o2").string());
+  Result m = run("run " + config("baseline.json") + " --input " + (out / "missing.stl").string() + " --out " + (out / "o2").string());
   CHECK(m.code == 1);
   CHECK_THAT(m.output, Contains("missing.stl"));
 }
