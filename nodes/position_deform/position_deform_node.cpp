@@ -1,6 +1,7 @@
 // Binding of the position-driven deformation (paper §5.2).
 #include "graph/node.h"
 #include "nodes/io/tetmesh_io.h"
+#include "nodes/polycube_segment/polycube_segment.h"
 #include "nodes/position_deform/position_deform.h"
 
 namespace polyhex {
@@ -46,7 +47,8 @@ const bool registered = register_node(make_node<P>(
       return make_artefact(std::move(m));
     }));
 
-// --save-all writes the PolyCube map as the tet mesh at its PolyCube positions.
+// --save-all writes the PolyCube map as the tet mesh at its PolyCube positions (<id>.polycube.vtk) and
+// the PolyCube surface with chart ids and labels as cell data (<id>.polycube_surface.vtk).
 const bool saver_registered = [] {
   Registry::instance().add_saver(artefact_name<PolyCubeMap>(), ".polycube.vtk", [](const Artefact& a, const std::filesystem::path& path) {
     auto m = a.as<PolyCubeMap>();
@@ -54,6 +56,9 @@ const bool saver_registered = [] {
     t.V = m->U;
     t.T = m->input->T;
     write_tetmesh(t, path);
+    std::string surface = path.string();
+    surface.replace(surface.size() - std::string(".vtk").size(), std::string::npos, "_surface.vtk");
+    write_polycube_vtk(surface, m->U, *m->segmentation);
   });
   return true;
 }();

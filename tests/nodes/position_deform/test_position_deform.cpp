@@ -3,6 +3,12 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <fstream>
+#include <iterator>
+
+#include <unistd.h>
+
+#include "graph/node.h"
 
 #include "nodes/polycube_segment/polycube_segment.h"
 #include "nodes/position_deform/position_deform.h"
@@ -147,4 +153,23 @@ TEST_CASE("bad inputs to position_deform are named", "[position]") {
   PositionDeformParams p;
   p.final_solve = "magic";
   REQUIRE_THROWS_WITH(position_deform(tets, *tets, seg, p), Catch::Contains("not one of: mvc_laplace, poisson"));
+}
+
+TEST_CASE("--save-all writes the PolyCube tet mesh and the PolyCube surface with chart ids", "[position]") {
+  SurfaceMesh box = test::voxel_surface(test::voxel_box(2, 1, 1), 0.5);
+  PositionDeformParams p;
+  p.edge_length = 0.1;
+  Run r = run_pipeline(box, 0.15, p);
+  auto [ext, saver] = Registry::instance().saver(artefact_name<PolyCubeMap>());
+  REQUIRE(saver);
+  CHECK(ext == ".polycube.vtk");
+  auto dir = std::filesystem::temp_directory_path() / ("polyhex_pm_save_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  saver(make_artefact(std::make_shared<const PolyCubeMap>(r.map)), dir / ("m" + ext));
+  REQUIRE(std::filesystem::exists(dir / "m.polycube.vtk"));
+  REQUIRE(std::filesystem::exists(dir / "m.polycube_surface.vtk"));
+  std::ifstream in(dir / "m.polycube_surface.vtk");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  CHECK_THAT(text, Catch::Contains("CELL_DATA " + std::to_string(r.seg->F.rows())) && Catch::Contains("SCALARS chart int"));
+  std::filesystem::remove_all(dir);
 }
