@@ -371,7 +371,7 @@ int chart_at(const Surface& s, const std::vector<int>& chart, int v, const std::
 struct State {
   std::vector<int> label;      // #F
   std::vector<char> band;      // #F: inserted by a split
-  int splits_multi = 0, splits_wedge = 0, removed_small = 0;
+  int splits_multi = 0, splits_wedge = 0, splits_island = 0, repaired_corners = 0, removed_small = 0;
 };
 
 /// §5.1 multi-orientation charts: a chart touching a chart of the opposite direction along a
@@ -684,6 +684,8 @@ PolyCubeSegmentation make_result(const Surface& s, const State& st) {
   r.corners = S.corners;
   r.splits_multi_orientation = st.splits_multi;
   r.splits_wedge = st.splits_wedge;
+  r.splits_island = st.splits_island;
+  r.repaired_corners = st.repaired_corners;
   r.removed_small = st.removed_small;
 
   std::set<int> failing;
@@ -762,6 +764,194 @@ PolyCubeSegmentation make_result(const Surface& s, const State& st) {
   return r;
 }
 
+// ---------------------------------------------------------------------------------------------
+// Local repairs of problems the §5.1 splits leave (extensions, each accepted only when it improves
+// the structure's score, so a valid structure is never touched)
+
+/// How far a labelling is from a valid PolyCube: (number of problems, total neighbour deficit
+/// sum_c max(0, 4 - #neighbours)); smaller is better, compared lexicographically.
+std::pair<int, int> structure_score(const Surface& s, const State& st) {
+  PolyCubeSegmentation r = make_result(s, st);
+  int deficit = 0;
+  for (auto& c : r.charts) deficit += std::max(0, 4 - int(c.neighbours.size()));
+  return {int(r.problems.size()), deficit};
+}
+
+/// Extension of §5.1 (param split_islands). A chart C with fewer than four neighbours that borders a
+/// chart R along a curve without corners (an island inside R, R a ring with two or more boundary
+/// loops) cannot become a PolyCube face however its boundary is straightened: R must be cut.
+/// Cut R along the cheapest path from C's boundary through R to a vertex of R's boundary touching a
+/// chart C does not neighbour yet; the path cost is L (1.1 - Align) as in the wedge cuts, with Align
+/// the alignment of each mesh edge with the axis a C-R PolyCube edge runs along (neither C's nor R's
+/// axis). A separating chart of width h is inserted along it, its label by the §5.1 neighbour rule
+/// (R twice, C, and the chart reached), or C's own label (C is extended across R). Of these cuts
+/// over all of C's neighbours R, the one giving the best score (then the cheapest path) is kept if
+/// it improves the structure. Repeated until no chart gains from a cut.
+void split_islands(const Surface& s, const std::vector<Vec3>& normal, double h, int max_splits, State& st) {
+  std::set<std::pair<int, int>> failed;  // (a triangle of C, a triangle of R) cuts that did not help
+  while (st.splits_island < max_splits) {
+    Structure S = analyse(s, st.label);
+    std::vector<int> chart_label(S.n), rep(S.n);
+    for (int t = 0; t < s.nf(); ++t) {
+      chart_label[S.chart[t]] = st.label[t];
+      rep[S.chart[t]] = t;
+    }
+    const auto before = structure_score(s, st);
+    bool applied = false;
+    for (int C = 0; C < S.n && !applied; ++C) {
+      if (S.adj[C].size() >= 4) continue;
+      // best candidate over C's neighbours R and the two labels: lowest score, then cheapest path
+      std::tuple<std::pair<int, int>, double> best{before, kInf};
+      State best_state;
+      for (int R : S.adj[C]) {
+        if (failed.count({rep[C], rep[R]})) continue;
+        int t_axis = 3 - label_axis(chart_label[C]) - label_axis(chart_label[R]);
+        if (label_axis(chart_label[C]) == label_axis(chart_label[R])) t_axis = -1;
+        // sources: vertices between C and R only; targets: R's boundary vertices touching a chart
+        // that is not C, R or a neighbour of C
+        std::vector<double> dist(s.V->rows(), kInf);
+        std::vector<int> pred(s.V->rows(), -1);
+        using Item = std::pair<double, int>;
+        std::priority_queue<Item, std::vector<Item>, std::greater<Item>> q;
+        auto charts_at = [&](int v) {
+          std::set<int> cs;
+          for (int t : s.vert_tris[v]) cs.insert(S.chart[t]);
+          return cs;
+        };
+        for (int v = 0; v < int(s.V->rows()); ++v) {
+          if (s.vert_tris[v].empty()) continue;
+          auto cs = charts_at(v);
+          if (cs == std::set<int>{std::min(C, R), std::max(C, R)}) {
+            dist[v] = 0;
+            q.push({0.0, v});
+          }
+        }
+        int target = -1;
+        while (!q.empty()) {
+          auto [d, u] = q.top();
+          q.pop();
+          if (d > dist[u]) continue;
+          auto cs = charts_at(u);
+          bool new_nbr = false;
+          for (int c : cs)
+            new_nbr = new_nbr || (c != C && c != R && !std::binary_search(S.adj[C].begin(), S.adj[C].end(), c));
+          if (new_nbr) {
+            target = u;
+            break;
+          }
+          if (!cs.count(R) || (dist[u] > 0 && cs.size() > 1)) continue;  // walk through R's interior
+          for (auto& [w, e] : s.vert_edges[u]) {
+            if (S.chart[s.edges[e].t[0]] != R && S.chart[s.edges[e].t[1]] != R) continue;
+            if (charts_at(w).count(C)) continue;
+            Vec3 dv = s.pos(w) - s.pos(u);
+            double len = dv.norm();
+            double align = t_axis >= 0 && len > 0 ? std::abs(dv[t_axis]) / len : 1.0;
+            double nd = d + len * (1.1 - align);
+            if (nd < dist[w]) {
+              dist[w] = nd;
+              pred[w] = u;
+              q.push({nd, w});
+            }
+          }
+        }
+        if (target < 0) {
+          failed.insert({rep[C], rep[R]});
+          continue;
+        }
+        std::vector<int> path;
+        for (int v = target; v >= 0; v = pred[v]) path.push_back(v);
+        std::vector<char> allowed(s.nf(), 0);
+        for (int t = 0; t < s.nf(); ++t) allowed[t] = S.chart[t] == R;
+        std::vector<int> band = grow_band(s, path, allowed, 0.5 * h);
+        int E = chart_at(s, S.chart, target, {C, R});
+        std::vector<int> nbr_labels = {chart_label[R], chart_label[R], chart_label[C]};
+        if (E >= 0) nbr_labels.push_back(chart_label[E]);
+        int rule = separating_label(nbr_labels, mean_normal(s, normal, band), true, -1);
+        bool helps = false;
+        for (int l : {rule, chart_label[C]}) {
+          State trial = st;
+          for (int t : band) {
+            trial.label[t] = l;
+            trial.band[t] = 1;
+          }
+          auto score = structure_score(s, trial);
+          helps = helps || score < before;
+          if (std::make_tuple(score, dist[target]) < best) {
+            best = {score, dist[target]};
+            best_state = std::move(trial);
+          }
+        }
+        if (!helps) failed.insert({rep[C], rep[R]});
+      }
+      if (std::get<0>(best) < before) {
+        st = std::move(best_state);
+        ++st.splits_island;
+        applied = true;
+      }
+    }
+    if (!applied) return;
+  }
+}
+
+/// Extension of §5.1 (param repair_corners). A vertex where four or more chart edges meet, or where
+/// charts of opposite directions touch only at the vertex (a saddle: +Z, -X, -Z, +X around it), is
+/// not a PolyCube corner. A small patch around the vertex (the triangles within r of it, r = 0, h/2,
+/// h, 2h) is given one direction, trying the directions in order of similarity to the patch's mean
+/// normal (for a saddle the best one is on the third axis, and a chart of that label nearby absorbs
+/// the patch); the first relabelling that improves the structure's score is kept. Repeated until no
+/// bad vertex gains.
+void repair_corners(const Surface& s, const std::vector<Vec3>& normal, double h, int max_repairs, State& st) {
+  std::set<int> failed;
+  std::vector<char> all(s.nf(), 1);
+  while (st.repaired_corners < max_repairs) {
+    PolyCubeSegmentation r = make_result(s, st);
+    if (r.valid) return;
+    std::vector<int> bad;
+    for (auto& c : r.corners)
+      if ((c.valence != 3 || c.charts.size() != 3) && !failed.count(c.vertex)) bad.push_back(c.vertex);
+    for (int v = 0; v < int(s.V->rows()); ++v) {
+      if (failed.count(v) || s.vert_tris[v].empty()) continue;
+      std::set<int> ls;
+      for (int t : s.vert_tris[v]) ls.insert(st.label[t]);
+      for (int l : ls)
+        if ((l ^ 1) > l && ls.count(l ^ 1)) {
+          bad.push_back(v);
+          break;
+        }
+    }
+    std::sort(bad.begin(), bad.end());
+    bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
+    if (bad.empty()) return;
+    const auto before = structure_score(s, st);
+    bool applied = false;
+    for (int v : bad) {
+      for (double radius : {0.0, 0.5 * h, h, 2 * h}) {
+        std::vector<int> patch = grow_band(s, {v}, all, radius);
+        Vec3 n = mean_normal(s, normal, patch);
+        std::array<int, 6> order = {0, 1, 2, 3, 4, 5};
+        std::sort(order.begin(), order.end(),
+                  [&](int a, int b) { return label_dir(a).dot(n) > label_dir(b).dot(n); });
+        for (int l : order) {
+          State trial = st;
+          for (int t : patch) trial.label[t] = l;
+          if (structure_score(s, trial) < before) {
+            st = std::move(trial);
+            applied = true;
+            break;
+          }
+        }
+        if (applied) break;
+      }
+      if (applied) {
+        ++st.repaired_corners;
+        break;
+      }
+      failed.insert(v);
+    }
+    if (!applied) return;
+  }
+}
+
 /// Removes the small charts (area below p.small_chart_area of the surface) that `bad` selects,
 /// relabelling them by flood fill; repeats until none is selected. `straighten_first` straightens
 /// before each round. Counts the removed charts in st.removed_small.
@@ -820,6 +1010,8 @@ PolyCubeSegmentation segment_once(const Surface& s, const PolyCubeSegmentParams&
   if (p.split_multi_orientation) split_multi_orientation(s, normal, h, p.max_splits, st);
   if (p.split_wedges) split_wedges(s, normal, p, st);
   if (p.final_cleanup) remove_small_invalid(s, normal, p, st);
+  if (p.split_islands) split_islands(s, normal, h, p.max_splits, st);
+  if (p.repair_corners) repair_corners(s, normal, h, p.max_splits, st);
   PolyCubeSegmentation r = make_result(s, st);
   r.smoothing_iterations = smoothing;
   return r;
@@ -913,6 +1105,20 @@ int clean_up_labels(const RowMatrixX3d& V, const RowMatrixX3i& F, Eigen::VectorX
   clean_up(s, s.normal, p, st);
   label = Eigen::Map<const Eigen::VectorXi>(st.label.data(), s.nf());
   return st.removed_small;
+}
+
+std::pair<int, int> repair_polycube_labels(const RowMatrixX3d& V, const RowMatrixX3i& F, Eigen::VectorXi& label,
+                                           const PolyCubeSegmentParams& p) {
+  check_labels(F, label);
+  Surface s = build_surface(V, F);
+  State st;
+  st.label.assign(label.data(), label.data() + label.size());
+  st.band.assign(s.nf(), 0);
+  const double h = p.hex_edge_length * s.diag;
+  if (p.split_islands) split_islands(s, s.normal, h, p.max_splits, st);
+  if (p.repair_corners) repair_corners(s, s.normal, h, p.max_splits, st);
+  label = Eigen::Map<const Eigen::VectorXi>(st.label.data(), s.nf());
+  return {st.splits_island, st.repaired_corners};
 }
 
 void require_valid_polycube(const PolyCubeSegmentation& s) {

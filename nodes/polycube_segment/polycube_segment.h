@@ -5,6 +5,7 @@
 #pragma once
 
 #include <filesystem>
+#include <utility>
 
 #include "nodes/artefacts/meshes.h"
 #include "nodes/artefacts/polycube.h"
@@ -24,6 +25,8 @@ struct PolyCubeSegmentParams {
   int max_cut_candidates = 200;        ///< cut candidates tested per wedge, cheapest first
   int max_splits = 32;                 ///< upper bound on separating charts of each kind
   bool final_cleanup = true;           ///< after the splits, remove small charts with < 4 neighbours by flood fill (extension of §5.1)
+  bool split_islands = true;           ///< cut a ring chart from the boundary of a chart with < 4 neighbours it encloses (extension of §5.1)
+  bool repair_corners = true;          ///< relabel a small patch at a 4-valent corner / opposite-direction touch point (extension of §5.1)
   int fallback_retries = 2;            ///< if invalid, retry with doubled smoothing this many times (reported as a warning)
   bool allow_invalid = false;          ///< pass an invalid structure on with a warning instead of failing
   bool save_surface = false;           ///< write <id>.charts.vtk (also written with --save-all)
@@ -60,6 +63,17 @@ PolyCubeSegmentation analyse_polycube_labels(const RowMatrixX3d& V, const RowMat
 /// \throw InvalidInput as analyse_polycube_labels
 int clean_up_labels(const RowMatrixX3d& V, const RowMatrixX3i& F, Eigen::VectorXi& label,
                     const PolyCubeSegmentParams& p = {});
+
+/// Extensions of §5.1 on a given labelling (the steps segment_polycube runs after the splits when
+/// p.split_islands / p.repair_corners): cut ring charts from the boundary of an enclosed chart with
+/// fewer than 4 neighbours, then relabel small patches at 4-valent corners and at vertices where
+/// opposite directions touch. Every change is kept only when it lowers (problems, neighbour
+/// deficit), so a valid labelling is returned unchanged. Normals are the unsmoothed triangle normals.
+/// \param label  #F labels 0..5, changed in place
+/// \return {island cuts, repaired corners}
+/// \throw InvalidInput as analyse_polycube_labels
+std::pair<int, int> repair_polycube_labels(const RowMatrixX3d& V, const RowMatrixX3i& F, Eigen::VectorXi& label,
+                                           const PolyCubeSegmentParams& p = {});
 
 /// \throw InvalidInput listing the problems and naming the failing charts when !s.valid
 void require_valid_polycube(const PolyCubeSegmentation& s);

@@ -14,6 +14,8 @@ json segmentation_metrics(const PolyCubeSegmentation& s) {
   m["edges"] = s.edges.size();
   m["splits_multi_orientation"] = s.splits_multi_orientation;
   m["splits_wedge"] = s.splits_wedge;
+  m["splits_island"] = s.splits_island;
+  m["repaired_corners"] = s.repaired_corners;
   m["removed_small"] = s.removed_small;
   m["valid"] = s.valid;
   m["failing_charts"] = s.failing_charts;
@@ -41,6 +43,8 @@ const bool registered = register_node(make_node<P>(
         .add("max_cut_candidates", &P::max_cut_candidates, "cut candidates tested per wedge", 1, 100000)
         .add("max_splits", &P::max_splits, "maximum separating charts of each kind", 0, 10000)
         .add("final_cleanup", &P::final_cleanup, "after the splits, remove small charts with < 4 neighbours")
+        .add("split_islands", &P::split_islands, "cut ring charts from the boundary of a chart with < 4 neighbours")
+        .add("repair_corners", &P::repair_corners, "relabel a patch at 4-valent corners / opposite touch points")
         .add("fallback_retries", &P::fallback_retries, "retries with doubled smoothing when invalid", 0, 10)
         .add("allow_invalid", &P::allow_invalid, "pass an invalid structure on with a warning")
         .add("save_surface", &P::save_surface, "write <id>.charts.vtk"),

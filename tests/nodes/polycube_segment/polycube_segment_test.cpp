@@ -42,6 +42,8 @@ PolyCubeSegmentation segment_without(const TetMesh& m, bool PolyCubeSegmentParam
   PolyCubeSegmentParams p;
   p.*split = false;
   p.fallback_retries = 0;
+  p.split_islands = false;  // the extensions would repair what the §5.1 step left
+  p.repair_corners = false;
   return segment_polycube(m, p);
 }
 
@@ -340,6 +342,8 @@ TEST_CASE("polycube_segment node: metrics, VTK output and failure", "[segment]")
   CHECK(ctx.metrics["valid"] == true);
   CHECK(ctx.metrics["splits_multi_orientation"] == 0);
   CHECK(ctx.metrics["splits_wedge"] == 0);
+  CHECK(ctx.metrics["splits_island"] == 0);
+  CHECK(ctx.metrics["repaired_corners"] == 0);
   CHECK(ctx.metrics["removed_small"] == 0);
   CHECK(ctx.metrics["failing_charts"].empty());
   std::ifstream vtk(dir / "seg.charts.vtk");
@@ -355,11 +359,15 @@ TEST_CASE("polycube_segment node: metrics, VTK output and failure", "[segment]")
   bad.items.push_back(make_artefact(fading_step()));
   NodeContext ctx2 = ctx;
   ctx2.metrics = json::object();
-  json strict = spec->check_params(json{{"split_wedges", false}, {"fallback_retries", 0}}, "seg");
+  json strict = spec->check_params(json{{"split_wedges", false}, {"fallback_retries", 0}, {"split_islands", false}, {"repair_corners", false}}, "seg");
   CHECK_THROWS_WITH(spec->run(strict, bad, ctx2), Catch::Contains("has 2 neighbour(s)"));
   NodeContext ctx3 = ctx2;
   ctx3.warnings.clear();
-  json lenient = spec->check_params(json{{"split_wedges", false}, {"fallback_retries", 0}, {"allow_invalid", true}}, "seg");
+  json lenient = spec->check_params(json{{"split_wedges", false},
+                                              {"fallback_retries", 0},
+                                              {"split_islands", false},
+                                              {"repair_corners", false},
+                                              {"allow_invalid", true}}, "seg");
   Artefact passed = spec->run(lenient, bad, ctx3);
   CHECK_FALSE(passed.as<PolyCubeSegmentation>()->valid);
   CHECK(ctx3.metrics["valid"] == false);
