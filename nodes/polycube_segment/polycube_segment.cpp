@@ -893,13 +893,34 @@ void split_islands(const Surface& s, const std::vector<Vec3>& normal, double h, 
   }
 }
 
+/// Cheap local test of a relabelled patch before the global score: at every vertex of the patch,
+/// no two opposite directions meet, a label change across a mesh edge is a change of axis, and the
+/// label changes around the vertex number 0, 2 or 3 (inside a chart, on a chart edge, a corner).
+bool locally_plausible(const Surface& s, const std::vector<int>& label, const std::vector<int>& patch) {
+  for (int t : patch)
+    for (int k = 0; k < 3; ++k) {
+      int v = (*s.F)(t, k), changes = 0, seen = 0;
+      for (auto& [w, e] : s.vert_edges[v]) {
+        int a = label[s.edges[e].t[0]], b = label[s.edges[e].t[1]];
+        seen |= (1 << a) | (1 << b);
+        if (a == b) continue;
+        if (label_axis(a) == label_axis(b)) return false;
+        ++changes;
+      }
+      if (changes == 1 || changes > 3) return false;
+      for (int l = 0; l < 6; l += 2)
+        if ((seen >> l & 3) == 3) return false;
+    }
+  return true;
+}
+
 /// Extension of §5.1 (param repair_corners). A vertex where four or more chart edges meet, or where
 /// charts of opposite directions touch only at the vertex (a saddle: +Z, -X, -Z, +X around it), is
 /// not a PolyCube corner. A small patch around the vertex (the triangles within r of it, r = 0, h/2,
 /// h, 2h) is given one direction, trying the directions in order of similarity to the patch's mean
 /// normal (for a saddle the best one is on the third axis, and a chart of that label nearby absorbs
-/// the patch); the first relabelling that improves the structure's score is kept. Repeated until no
-/// bad vertex gains.
+/// the patch); the first relabelling that is locally plausible (locally_plausible) and improves the
+/// structure's score is kept. Repeated until no bad vertex gains.
 void repair_corners(const Surface& s, const std::vector<Vec3>& normal, double h, int max_repairs, State& st) {
   std::set<int> failed;
   std::vector<char> all(s.nf(), 1);
@@ -934,7 +955,7 @@ void repair_corners(const Surface& s, const std::vector<Vec3>& normal, double h,
         for (int l : order) {
           State trial = st;
           for (int t : patch) trial.label[t] = l;
-          if (structure_score(s, trial) < before) {
+          if (locally_plausible(s, trial.label, patch) && structure_score(s, trial) < before) {
             st = std::move(trial);
             applied = true;
             break;
