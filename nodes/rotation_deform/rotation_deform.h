@@ -32,6 +32,32 @@
 ///  - Eq. 1 multiplied by the degree N_i is L v = Σ_j ½(∇_i+∇_j)(ṽ_i-ṽ_j): the same graph Laplacian;
 ///    the pinned vertex's row and column are replaced by the identity (its value moved to the
 ///    right-hand side). L depends only on connectivity, so it is factored once.
+///
+/// Measured limits (edge length 0.02, 5 iterations; alignment after iteration 5 / inverted tets):
+/// the target of alignment >= 0.7 on every model is NOT met by this (paper) formulation
+/// with unit anchors: bunny 0.583 / 488, fandisk 0.935 / 82, rockerarm 0.778 / 1085,
+/// fertility 0.602 / 2103, bumpy_torus 0.530 / 1217, casting 0.884 / 455. Variants measured and
+/// rejected (kept out of the code because none reaches 0.7 everywhere without several times more
+/// inverted tets):
+///  - anchor weight per vertex w² N_v (the balance of the paper's normalised Laplace row q_i - mean_j q_j
+///    against a unit anchor row): bunny 0.681 / 3085, fandisk 0.943 / 374, rockerarm 0.817 / 4617,
+///    fertility 0.667 / 6639, bumpy_torus 0.649 / 11472, casting 0.915 / 1659; alignment stops rising
+///    after iteration 4 on rockerarm, fertility, casting. w² = N_v / 4 lies between (bunny 0.653 / 1138,
+///    fertility 0.654 / 3808, bumpy_torus 0.612 / 4292): alignment and inversions trade along one curve,
+///    so `anchor_weight` is the alignment-strength knob and stays at the paper's 1.
+///  - target axis chosen from normals smoothed over 3 or 10 surface rings (rotation still from the raw
+///    normal): within ±0.005 of the raw choice on all six models; the axis choice is not what limits.
+///    Rotating the smoothed normal (a smooth field that leaves bumps unflattened) is worse
+///    (bunny 0.557, fertility 0.528 with w² N_v).
+///  - features off (feature_angle 180): bunny 0.584, fertility 0.602, bumpy_torus 0.530: the feature
+///    rule does not limit either.
+///  - Eq. 1 on the input edges with accumulated rotations ∇_total = ∇_k ... ∇_1 (instead of this
+///    iteration's rotations on the previous mesh): lower alignment (bunny 0.561) and more inverted
+///    tets (fertility 3360, bumpy_torus 1708), more volume loss (fertility 0.73): the paper's
+///    "each iteration starts from the previous deformed mesh" is kept.
+/// The models below 0.7 (bunny, fertility, bumpy_torus) carry surface detail (fur-like noise, bumps)
+/// at a scale of a few tets: a rotation field smooth enough to integrate without folding does not
+/// flatten it, and the 15° per-triangle measure counts it as unaligned.
 #pragma once
 
 #include <Eigen/Core>
