@@ -44,7 +44,11 @@
 ///    fertility 0.667 / 6639, bumpy_torus 0.649 / 11472, casting 0.915 / 1659; alignment stops rising
 ///    after iteration 4 on rockerarm, fertility, casting. w² = N_v / 4 lies between (bunny 0.653 / 1138,
 ///    fertility 0.654 / 3808, bumpy_torus 0.612 / 4292): alignment and inversions trade along one curve,
-///    so `anchor_weight` is the alignment-strength knob and stays at the paper's 1.
+///    so `anchor_weight` is the alignment-strength knob and stays at the paper's 1. Downstream
+///    (configs/polycube.json) anchor_weight 2 gives bunny alignment 0.671 but final hex sj_min -0.090 /
+///    sj_avg 0.928 against -0.006 / 0.931 at 1 (fandisk -0.054 / 0.951 against -0.004 / 0.959).
+///  - Inverted tets are boundary slivers: of bunny's 488 (fertility 2103) after iteration 5, 476 (1865)
+///    touch the boundary and 328 (584) are among the 5 % worst-shaped input tets.
 ///  - target axis chosen from normals smoothed over 3 or 10 surface rings (rotation still from the raw
 ///    normal): within ±0.005 of the raw choice on all six models; the axis choice is not what limits.
 ///    Rotating the smoothed normal (a smooth field that leaves bumps unflattened) is worse
