@@ -230,12 +230,15 @@ struct Structure {
   std::vector<PolyCubeEdge> edges;
   std::vector<PolyCubeCorner> corners;
   std::vector<int> degree;                // #V chart-boundary mesh edges per vertex
+  std::vector<int> label;                 // #charts direction label of each chart
 };
 
 Structure analyse(const Surface& s, const std::vector<int>& label) {
   Structure st;
   st.n = label_components(s, label, st.chart);
   st.adj = chart_adjacency(s, st.chart, st.n);
+  st.label.resize(st.n);
+  for (int t = 0; t < s.nf(); ++t) st.label[st.chart[t]] = label[t];
   const int nv = int(s.V->rows());
   std::vector<char> on_boundary(s.edges.size(), 0), visited(s.edges.size(), 0);
   st.degree.assign(nv, 0);
@@ -1019,6 +1022,28 @@ void remove_small_invalid(const Surface& s, const std::vector<Vec3>& normal, con
                       [](const Structure& S, int c, int) { return S.adj[c].size() < 4; });
 }
 
+/// The extensions after the splits: island cuts, then corner patches (as the params select). If
+/// the result is still invalid and p.final_cleanup, the same from the input labelling with the
+/// small charts beside a chart of their own axis removed by flood fill first (spurious charts the
+/// clean-up's flood fill or the max_splits cap left); the better of the two is kept.
+void repair(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p, State& st) {
+  const double h = p.hex_edge_length * s.diag;
+  auto run = [&](State& x) {
+    if (p.split_islands) split_islands(s, normal, h, p.max_splits, x);
+    if (p.repair_corners) repair_corners(s, normal, h, p.max_splits, x);
+  };
+  State base = st;
+  run(st);
+  if (!p.final_cleanup || make_result(s, st).valid) return;
+  remove_small_charts(s, normal, p, base, false, [](const Structure& S, int c, int) {
+    for (int d : S.adj[c])
+      if (label_axis(S.label[d]) == label_axis(S.label[c])) return true;
+    return false;
+  });
+  run(base);
+  if (structure_score(s, base) < structure_score(s, st)) st = std::move(base);
+}
+
 /// One full §5.1 run with a given number of normal-smoothing passes.
 PolyCubeSegmentation segment_once(const Surface& s, const PolyCubeSegmentParams& p, int smoothing) {
   std::vector<Vec3> normal = smoothed_normals(s, smoothing);
@@ -1031,8 +1056,7 @@ PolyCubeSegmentation segment_once(const Surface& s, const PolyCubeSegmentParams&
   if (p.split_multi_orientation) split_multi_orientation(s, normal, h, p.max_splits, st);
   if (p.split_wedges) split_wedges(s, normal, p, st);
   if (p.final_cleanup) remove_small_invalid(s, normal, p, st);
-  if (p.split_islands) split_islands(s, normal, h, p.max_splits, st);
-  if (p.repair_corners) repair_corners(s, normal, h, p.max_splits, st);
+  repair(s, normal, p, st);
   PolyCubeSegmentation r = make_result(s, st);
   r.smoothing_iterations = smoothing;
   return r;
@@ -1135,9 +1159,7 @@ std::pair<int, int> repair_polycube_labels(const RowMatrixX3d& V, const RowMatri
   State st;
   st.label.assign(label.data(), label.data() + label.size());
   st.band.assign(s.nf(), 0);
-  const double h = p.hex_edge_length * s.diag;
-  if (p.split_islands) split_islands(s, s.normal, h, p.max_splits, st);
-  if (p.repair_corners) repair_corners(s, s.normal, h, p.max_splits, st);
+  repair(s, s.normal, p, st);
   label = Eigen::Map<const Eigen::VectorXi>(st.label.data(), s.nf());
   return {st.splits_island, st.repaired_corners};
 }

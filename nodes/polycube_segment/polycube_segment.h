@@ -14,6 +14,9 @@
 ///   touching at one vertex, a 4-valent corner; conjoined_twins, encrusted_cube, bimba) is no PolyCube
 ///   corner; a small patch around it relabelled to the third axis splits it into valence-3 corners.
 ///   The same search also resolves the remaining same-axis neighbours on femur and carter.
+/// - small same-axis charts (with final_cleanup): a small chart beside a chart of its own axis is
+///   spurious; if the structure is still invalid, it is removed by flood fill before the two repairs
+///   above and the better result kept (carter at edge 0.04).
 #pragma once
 
 #include <filesystem>
@@ -80,7 +83,10 @@ int clean_up_labels(const RowMatrixX3d& V, const RowMatrixX3i& F, Eigen::VectorX
 /// p.split_islands / p.repair_corners): cut ring charts from the boundary of an enclosed chart with
 /// fewer than 4 neighbours, then relabel small patches at 4-valent corners and at vertices where
 /// opposite directions touch. Every change is kept only when it lowers (problems, neighbour
-/// deficit), so a valid labelling is returned unchanged. Normals are the unsmoothed triangle normals.
+/// deficit), so a valid labelling is returned unchanged. If still invalid (and p.final_cleanup), the
+/// same is tried after removing small charts (area < p.small_chart_area of the surface) that border a
+/// chart of their own axis by flood fill; the better result is kept. Normals are the unsmoothed
+/// triangle normals.
 /// \param label  #F labels 0..5, changed in place
 /// \return {island cuts, repaired corners}
 /// \throw InvalidInput as analyse_polycube_labels

@@ -121,6 +121,32 @@ TEST_CASE("saddle: opposite directions touching at one vertex get a patch of the
       if (box.F(t, k) == centre) CHECK(label[t] == 2);
 }
 
+TEST_CASE("small chart beside a chart of its own axis is removed, the box restored", "[segment]") {
+  // 6x6x6 box; one unit square in the middle of the +Y face labelled -Y: a chart of area 1 (below
+  // 0.01 x 216, above 0.001 x 216) with one neighbour, on its own axis
+  SurfaceMesh box = voxel_surface(voxel_box(6, 6, 6));
+  const Eigen::VectorXi exact = normal_labels(box);
+  Eigen::VectorXi label = exact;
+  for (int t = 0; t < box.F.rows(); ++t) {
+    Eigen::Vector3d c = centroid(box, t);
+    if (label[t] == 2 && c.x() > 2 && c.x() < 3 && c.z() > 2 && c.z() < 3) label[t] = 3;
+  }
+  PolyCubeSegmentation before = analyse_polycube_labels(box.V, box.F, label);
+  CHECK_THAT(joined(before), Catch::Contains("are neighbours on the same axis"));
+  PolyCubeSegmentParams p;
+  p.small_chart_area = 0.01;
+  SECTION("removed") {
+    repair_polycube_labels(box.V, box.F, label, p);
+    CHECK(label == exact);
+    CHECK(analyse_polycube_labels(box.V, box.F, label).valid);
+  }
+  SECTION("not small: left to the other repairs, still invalid") {
+    p.small_chart_area = 1e-3;
+    repair_polycube_labels(box.V, box.F, label, p);
+    CHECK_FALSE(analyse_polycube_labels(box.V, box.F, label).valid);
+  }
+}
+
 TEST_CASE("repairs leave a valid labelling unchanged", "[segment]") {
   SurfaceMesh box = voxel_surface(voxel_box(2, 3, 4));
   Eigen::VectorXi label = normal_labels(box), copy = label;
