@@ -62,7 +62,19 @@ class Optimizer {
   }
 
   HexMesh run(const std::string& source) {
+    released_.assign(size_t(V_.rows()), 0);
     untangle();
+    if (p_.release_boundary && count_inverted() > 0) {
+      // Last resort: a hex squeezed against the surface (typically at a sharp or concave feature the
+      // lattice does not follow) may be impossible to untangle with its boundary corners on the surface.
+      // A solver rejects an inverted hex but accepts a boundary vertex slightly off the surface, so the
+      // boundary vertices of the hexes still inverted may leave it; boundary_distance_max reports how far.
+      for (Eigen::Index h = 0; h < H_.rows(); ++h)
+        if (hex_scaled_jacobian(points(int(h))).corner_min <= 0)
+          for (int k = 0; k < 8; ++k)
+            if (boundary_[size_t(H_(h, k))] && !released_[size_t(H_(h, k))]) released_[size_t(H_(h, k))] = 1, ++st_.released_vertices;
+      untangle();
+    }
     maxmin();
     shape();
     HexMesh out;
@@ -191,7 +203,9 @@ class Optimizer {
   // ------------------------------------------------------------------------------------------
   // one vertex: descent on `objective` (minimised), accepted by `accept(before)`
 
-  Vec3 project(int v, const Vec3& x) const { return boundary_[size_t(v)] ? tree_.closest(x).point : x; }
+  /// A boundary vertex kept on the input surface (not released by the last-resort untangling).
+  bool on_surface(int v) const { return boundary_[size_t(v)] && !released_[size_t(v)]; }
+  Vec3 project(int v, const Vec3& x) const { return on_surface(v) ? tree_.closest(x).point : x; }
 
   /// Moves vertex v to decrease f; `ok()` judges the trial position (V_ holds it). Returns true if moved.
   template <class F, class Ok>
@@ -210,7 +224,7 @@ class Optimizer {
       g[a] = (fp - fm) / (2 * d);
     }
     Vec3 normal = Vec3::Zero();
-    if (boundary_[size_t(v)]) {
+    if (on_surface(v)) {
       const auto hit = tree_.closest(x0);
       normal = normals_[size_t(hit.triangle)];
       g -= g.dot(normal) * normal;
@@ -361,6 +375,7 @@ class Optimizer {
   std::vector<double> scale_;
   std::vector<std::vector<int>> classes_;
   std::vector<char> boundary_;
+  std::vector<char> released_;  ///< boundary vertices allowed off the surface (last-resort untangling)
   std::vector<Vec3> normals_;
 };
 

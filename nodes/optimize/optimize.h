@@ -35,6 +35,7 @@ struct OptimizeParams {
   double shape_target_sj = 0.95;   ///< shape sweeps touch vertices with an incident hex below this SJ, [0, 1]
   double time_budget = 60.0;       ///< seconds for the whole stage (checked between colour classes), [0, 1e6]
   bool move_boundary = true;       ///< boundary vertices may slide on the surface
+  bool release_boundary = true;    ///< last resort: boundary corners of hexes still inverted after untangling may leave the surface
 };
 
 struct OptimizeStats {
@@ -47,6 +48,7 @@ struct OptimizeStats {
   int colours = 0;
   double boundary_distance_max = 0;    ///< max distance of a boundary vertex from the surface / bbox diagonal
   bool time_budget_hit = false;
+  long released_vertices = 0;          ///< boundary vertices released from the surface to untangle (release_boundary)
   double seconds = 0;
 };
 

@@ -20,7 +20,9 @@ const bool registered = register_node(make_node<P>(
         .add("shape_target_sj", &P::shape_target_sj, "shape sweeps move vertices of hexes below this scaled Jacobian",
              0.0, 1.0)
         .add("time_budget", &P::time_budget, "seconds for the whole stage", 0.0, 1e6)
-        .add("move_boundary", &P::move_boundary, "boundary vertices may slide on the surface"),
+        .add("move_boundary", &P::move_boundary, "boundary vertices may slide on the surface")
+        .add("release_boundary", &P::release_boundary,
+             "last resort: boundary corners of hexes still inverted after untangling may leave the surface"),
     {{"hexes", artefact_name<HexMesh>()}, {"surface", artefact_name<SurfaceMesh>()}}, artefact_name<HexMesh>(),
     [](const P& p, const Inputs& in, NodeContext& ctx) {
       OptimizeStats s;
@@ -39,6 +41,10 @@ const bool registered = register_node(make_node<P>(
       j["moves"] = s.moves;
       j["colours"] = s.colours;
       j["boundary_distance_max"] = s.boundary_distance_max;
+      j["released_vertices"] = s.released_vertices;
+      if (s.released_vertices > 0)
+        ctx.warn(std::to_string(s.released_vertices) + " boundary vertices left the surface to untangle hexes (max distance " +
+                 std::to_string(s.boundary_distance_max) + " of the bbox diagonal)");
       j["time_budget_hit"] = s.time_budget_hit;
       j["seconds"] = s.seconds;
       if (s.inverted_after > 0)

@@ -119,11 +119,34 @@ TEST_CASE("the optimize node never hands out an inverted hex silently", "[optimi
   in.items = {make_artefact(g), make_artefact(test::voxel_surface(test::voxel_box(3, 3, 3)))};
   NodeContext ctx;
   ctx.id = "opt";
-  json params = spec->check_params(json{{"untangle_iterations", 0}, {"iterations", 0}, {"shape_iterations", 0}}, "opt");
+  json params = spec->check_params(
+      json{{"untangle_iterations", 0}, {"iterations", 0}, {"shape_iterations", 0}, {"release_boundary", false}}, "opt");
   Artefact out = spec->run(params, in, ctx);
   CHECK(out.as<HexMesh>()->H.rows() == 27);
   CHECK(ctx.metrics["inverted"].get<long>() > 0);
   REQUIRE(ctx.warnings.size() == 1);
   CHECK_THAT(ctx.warnings[0], Catch::Contains("hexes are still inverted after optimization"));
   REQUIRE_THROWS_WITH(spec->check_params(json{{"target_sj", 2.0}}, "opt"), Catch::Contains("out of range"));
+}
+
+TEST_CASE("boundary vertices are released from the surface only for hexes still inverted", "[optimize]") {
+  // An interior vertex pushed through its neighbours: untangling moves interior vertices only as far as
+  // needed and the boundary stays on the surface, so the last-resort release must not trigger.
+  HexMesh g = test::grid_hex_mesh(3, 3, 3);
+  g.V.row((1 * 4 + 1) * 4 + 1) << 2.4, 2.3, 2.2;
+  OptimizeStats st;
+  optimize_hexes(g, test::voxel_surface(test::voxel_box(3, 3, 3)), OptimizeParams{}, &st);
+  CHECK(st.inverted_before > 0);
+  CHECK(st.inverted_after == 0);
+  CHECK(st.released_vertices == 0);
+  CHECK(st.boundary_distance_max < 1e-9);
+  // With no untangling sweep allowed the release marks the boundary corners of the inverted hexes.
+  OptimizeParams none;
+  none.untangle_iterations = 0;
+  none.iterations = 0;
+  none.shape_iterations = 0;
+  OptimizeStats st2;
+  optimize_hexes(g, test::voxel_surface(test::voxel_box(3, 3, 3)), none, &st2);
+  CHECK(st2.released_vertices > 0);
+  CHECK(st2.inverted_after > 0);
 }
