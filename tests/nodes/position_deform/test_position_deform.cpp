@@ -155,7 +155,7 @@ TEST_CASE("bad inputs to position_deform are named", "[position]") {
   REQUIRE_THROWS_WITH(position_deform(tets, *tets, seg, p), Catch::Contains("not one of: mvc_laplace, poisson"));
 }
 
-TEST_CASE("--save-all writes the PolyCube tet mesh and the PolyCube surface with chart ids", "[position]") {
+TEST_CASE("position_deform saver (--save-all) writes the PolyCube tet mesh and the PolyCube surface with chart ids", "[position]") {
   SurfaceMesh box = test::voxel_surface(test::voxel_box(2, 1, 1), 0.5);
   PositionDeformParams p;
   p.edge_length = 0.1;
