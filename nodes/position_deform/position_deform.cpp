@@ -67,6 +67,7 @@ struct Graph {
 struct OrderedPair {
   int p, q;
   int sign;
+  double evidence;  ///< |separation| / h that the order was read from (stronger evidence wins a conflict)
 };
 
 /// Mean value coordinates of point x w.r.t. the triangle (p1,p2,p3) of a closed star polyhedron around x
@@ -281,7 +282,7 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
       double w = p.distance_weight * std::min(group_size[key.first], group_size[key.second]) *
                  std::exp(-excess * excess / (sigma * sigma));
       if (w > 0) dpairs.push_back({key.first, key.second, delta, w});
-      if (std::abs(delta) > 0.5 * h) ordered.push_back({key.first, key.second, delta > 0 ? 1 : -1});
+      if (std::abs(delta) > 0.5 * h) ordered.push_back({key.first, key.second, delta > 0 ? 1 : -1, std::abs(delta) / h});
     }
     st.distance_pairs += int(dpairs.size());
     // Bridged pairs: two a-groups bordering one chart of another axis are its two ends along a.
@@ -295,10 +296,11 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
       for (size_t x = 0; x < gs.size(); ++x)
         for (size_t y = x + 1; y < gs.size(); ++y) {
           double diff = group_mean[gs[y]] - group_mean[gs[x]];
-          if (std::abs(diff) > 0.5 * h) ordered.push_back({gs[x], gs[y], diff > 0 ? 1 : -1});
+          if (std::abs(diff) > 0.5 * h) ordered.push_back({gs[x], gs[y], diff > 0 ? 1 : -1, std::abs(diff) / h});
         }
     }
-    std::sort(ordered.begin(), ordered.end(), [](auto& x, auto& y) { return std::tie(x.p, x.q) < std::tie(y.p, y.q); });
+    // A pair measured by the distance constraints comes first and wins over a bridged one.
+    std::stable_sort(ordered.begin(), ordered.end(), [](auto& x, auto& y) { return std::tie(x.p, x.q) < std::tie(y.p, y.q); });
     ordered.erase(std::unique(ordered.begin(), ordered.end(), [](auto& x, auto& y) { return x.p == y.p && x.q == y.q; }),
                   ordered.end());
     st.ordered_pairs += int(ordered.size());
@@ -341,18 +343,49 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
     for (int g = 0; g < nG; ++g) c[g] = y[nFree + g], k[g] = std::lround(c[g] / h);
     for (auto& o : ordered)
       if (o.sign * (c[o.q] - c[o.p]) <= 0) ++st.flipped_chart_orders;
-    for (int pass = 0; pass < 10000; ++pass) {
-      bool changed = false;
-      for (auto& o : ordered) {
-        long gap = o.sign * (k[o.q] - k[o.p]);
-        if (gap >= 1) continue;
-        // move the smaller group away by the missing amount
-        long need = 1 - gap;
-        if (group_size[o.q] <= group_size[o.p]) k[o.q] += o.sign * need;
-        else k[o.p] -= o.sign * need;
-        changed = true;
+    // The ordered pairs as a graph "lower -> upper". Pairs are taken by decreasing evidence and one that
+    // would close a cycle (contradicting stronger evidence) is dropped; then every chart is pushed up to
+    // at least one h above each chart below it, in topological order (longest path from the rounded values).
+    // The previous per-pair nudging could undo itself on conflicting pairs and leave orders swapped.
+    {
+      std::vector<int> idx(ordered.size());
+      std::iota(idx.begin(), idx.end(), 0);
+      std::stable_sort(idx.begin(), idx.end(), [&](int x, int y) { return ordered[x].evidence > ordered[y].evidence; });
+      std::vector<std::vector<int>> up(nG);
+      auto reaches = [&](int from, int to) {
+        std::vector<char> seen(nG, 0);
+        std::vector<int> stack{from};
+        seen[from] = 1;
+        while (!stack.empty()) {
+          int x = stack.back();
+          stack.pop_back();
+          if (x == to) return true;
+          for (int y : up[x])
+            if (!seen[y]) seen[y] = 1, stack.push_back(y);
+        }
+        return false;
+      };
+      std::vector<int> indeg(nG, 0);
+      for (int i : idx) {
+        const OrderedPair& o = ordered[i];
+        int lo = o.sign > 0 ? o.p : o.q, hi = o.sign > 0 ? o.q : o.p;
+        if (reaches(hi, lo)) {
+          ++st.order_constraints_dropped;
+          continue;
+        }
+        up[lo].push_back(hi);
+        ++indeg[hi];
       }
-      if (!changed) break;
+      std::vector<int> queue;
+      for (int g = 0; g < nG; ++g)
+        if (indeg[g] == 0) queue.push_back(g);
+      for (size_t head = 0; head < queue.size(); ++head) {
+        int x = queue[head];
+        for (int y : up[x]) {
+          k[y] = std::max(k[y], k[x] + 1);
+          if (--indeg[y] == 0) queue.push_back(y);
+        }
+      }
     }
     for (auto& o : ordered)
       if (o.sign * (k[o.q] - k[o.p]) < 1) ++st.flipped_after_rounding;

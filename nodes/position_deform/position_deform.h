@@ -19,7 +19,8 @@
 ///     the two charts), so that the constraint is as stiff as the chart it holds.
 ///  3. Chart coordinates are rounded to integers in units of h. Rounding must not swap or merge two
 ///     same-axis charts that are ordered (a distance pair, or the two ends of a chart of another axis
-///     that joins them): such pairs are pushed apart to at least one h, in their original order.
+///     that joins them): such pairs are pushed apart to at least one h, in their original order, by a
+///     longest-path pass over the order graph; a pair contradicting stronger evidence is dropped.
 ///  4. Final solve with the rounded chart coordinates pinned: `final_solve` = "mvc_laplace" (the paper:
 ///     a Laplace equation discretised with mean value coordinates, 2D on the surface, 3D in the volume,
 ///     weights computed on the deformed mesh) or "poisson" (step 1's energy with the charts pinned,
@@ -45,6 +46,7 @@ struct PositionDeformStats {
   int ordered_pairs = 0;                ///< pairs whose order rounding must keep (distance pairs + bridged pairs)
   int flipped_chart_orders = 0;         ///< ordered pairs whose order the Poisson step swapped (before the rounding fix)
   int flipped_after_rounding = 0;       ///< ordered pairs still swapped or merged after the rounding fix (should be 0)
+  int order_constraints_dropped = 0;    ///< ordered pairs dropped because they contradict stronger evidence (a cycle)
   int merged_same_axis_charts = 0;      ///< same-axis charts sharing a vertex, forced onto one plane
   double chart_coordinates_rounded_max_shift = 0;  ///< max |c − k h| / h over charts
   int inverted_tets = 0;                ///< tets of the PolyCube map with signed volume <= 0 (expected at concave edges, Fig. 9)

@@ -30,6 +30,7 @@ const bool registered = register_node(make_node<P>(
       j["ordered_pairs"] = s.ordered_pairs;
       j["flipped_chart_orders"] = s.flipped_chart_orders;
       j["flipped_after_rounding"] = s.flipped_after_rounding;
+      j["order_constraints_dropped"] = s.order_constraints_dropped;
       j["merged_same_axis_charts"] = s.merged_same_axis_charts;
       j["chart_coordinates_rounded_max_shift"] = s.chart_coordinates_rounded_max_shift;
       j["inverted_tets"] = s.inverted_tets;

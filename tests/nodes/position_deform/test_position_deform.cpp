@@ -54,6 +54,7 @@ void check_planes(const Run& r) {
     }
   }
   CHECK(r.stats.flipped_after_rounding == 0);
+  CHECK(r.stats.order_constraints_dropped == 0);
   CHECK(r.stats.planarity_error <= 1e-12);
 }
 
