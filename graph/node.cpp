@@ -45,4 +45,14 @@ std::pair<std::string, ArtefactSaver> Registry::saver(const std::string& artefac
   return it->second;
 }
 
+void Registry::add_codec(const std::string& artefact_type, ArtefactCodec codec) {
+  if (codecs_.count(artefact_type)) throw Error("artefact type `" + artefact_type + "` has two cache codecs");
+  codecs_.emplace(artefact_type, std::move(codec));
+}
+
+const ArtefactCodec* Registry::codec(const std::string& artefact_type) const {
+  auto it = codecs_.find(artefact_type);
+  return it == codecs_.end() ? nullptr : &it->second;
+}
+
 }  // namespace polyhex

@@ -25,7 +25,9 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <cstdint>
 #include <functional>
+#include <iosfwd>
 #include <map>
 #include <memory>
 #include <optional>
@@ -34,6 +36,7 @@
 #include <vector>
 
 #include "nodes/artefacts/meshes.h"
+#include "runtime/cancel.h"
 #include "runtime/errors.h"
 
 namespace polyhex {
@@ -104,7 +107,9 @@ struct NodeContext {
   std::function<void(double, const std::string&)> on_progress;  ///< may be empty
 
   void warn(const std::string& w) { warnings.push_back(w); }
+  /// Reports progress and is a cancellation point: \throw Interrupted after SIGINT/SIGTERM.
   void progress(double fraction, const std::string& what = {}) const {
+    throw_if_interrupted();
     if (on_progress) on_progress(fraction, what);
   }
 };
@@ -248,7 +253,14 @@ struct NodeSpec {
   std::function<json(const json& params, const std::string& where)> check_params;
   /// Run on canonical params. Exceptions propagate to the runtime which wraps them in NodeError.
   std::function<Artefact(const json& params, const Inputs& in, NodeContext& ctx)> run;
+  /// Code version of the node, part of its cache key: bump it when the algorithm's output changes.
+  std::string version = "1";
   std::string stage() const { return type.substr(0, type.find('/')); }
+  /// `register_node(make_node<P>(...).with_version("2"))`
+  NodeSpec with_version(std::string v) && {
+    version = std::move(v);
+    return std::move(*this);
+  }
 };
 
 template <class P>
@@ -269,6 +281,14 @@ NodeSpec make_node(std::string type, std::string doc, ParamSet<P> params, std::v
 /// Writes an artefact to a file (used by --save-all). \throw IOError
 using ArtefactSaver = std::function<void(const Artefact&, const std::filesystem::path&)>;
 
+/// Binary serialisation of one artefact type, for the artefact cache. `version` is the format
+/// version of the payload: bump it when the layout changes (older cache entries are then ignored).
+struct ArtefactCodec {
+  std::uint32_t version = 1;
+  std::function<void(const Artefact&, std::ostream&)> write;  ///< \throw IOError
+  std::function<Artefact(std::istream&)> read;                ///< \throw IOError on malformed data
+};
+
 class Registry {
  public:
   static Registry& instance();
@@ -284,11 +304,16 @@ class Registry {
   /// \return {ext, saver} or nullptr saver when none is registered
   std::pair<std::string, ArtefactSaver> saver(const std::string& artefact_type) const;
   void set_default_variant(const std::string& stage, const std::string& variant);
+  /// Cache codecs by artefact type. \throw Error when the type has one already
+  void add_codec(const std::string& artefact_type, ArtefactCodec codec);
+  /// \return the codec, or null when the type cannot be cached
+  const ArtefactCodec* codec(const std::string& artefact_type) const;
 
  private:
   std::map<std::string, NodeSpec> specs_;
   std::map<std::string, std::string> default_variant_;
   std::map<std::string, std::pair<std::string, ArtefactSaver>> savers_;
+  std::map<std::string, ArtefactCodec> codecs_;
 };
 
 inline bool register_node(NodeSpec spec) {

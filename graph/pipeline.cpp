@@ -214,6 +214,7 @@ RunResult Pipeline::run(const RunOptions& opt) const {
       result.error = e.what();
     }
   });
+  result.interrupted = interrupted();
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }
@@ -221,7 +222,7 @@ RunResult Pipeline::run(const RunOptions& opt) const {
 json RunResult::report() const {
   json r;
   r["polyhex_version"] = POLYHEX_VERSION;
-  r["status"] = error.empty() ? "ok" : "error";
+  r["status"] = error.empty() ? "ok" : interrupted ? "interrupted" : "error";
   if (!error.empty()) r["error"] = error;
   r["seconds"] = seconds;
   json nodes_json = json::object();

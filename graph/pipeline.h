@@ -40,6 +40,8 @@ struct RunOptions {
   std::filesystem::path out_dir = "polyhex-out";
   bool save_all = false;   ///< also write every mesh artefact as OUT/<id>.<ext>
   int threads = 0;         ///< 0 = all cores
+  /// Artefact cache folder; empty = no cache (every node runs).
+  std::filesystem::path cache_dir;
   /// Called on node start ("start"), end ("done") and progress ("progress"); may be empty.
   std::function<void(const std::string& event, const std::string& id, const std::string& type, double value,
                      const std::string& what)>
@@ -50,6 +52,7 @@ struct RunResult {
   std::vector<NodeRecord> nodes;  ///< in config order
   double seconds = 0;
   std::string error;              ///< empty when the run succeeded
+  bool interrupted = false;       ///< stopped by SIGINT/SIGTERM (error says where)
   /// report.json: {polyhex_version, status, error?, seconds, nodes: {id: {type, seconds, cache_hit, metrics, warnings}}}
   json report() const;
 };

@@ -18,6 +18,8 @@ struct RunRequest {
   std::filesystem::path out_dir = "polyhex-out";
   int threads = 0;
   bool save_all = false;
+  std::filesystem::path cache_dir;   ///< artefact cache; empty = default (.polyhex-cache beside out_dir)
+  bool no_cache = false;             ///< --no-cache: run every node, read and write no cache
   int verbosity = 0;                 ///< 0 = progress on a terminal only, 1 = -v, 2 = -vv
 };
 

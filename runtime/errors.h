@@ -5,6 +5,7 @@
 /// - IOError: a file cannot be read or written, or its content is malformed (names the file).
 /// - SolverError: a linear solve or factorization failed.
 /// - ConfigError: a config or command line is wrong (names the node and the valid choices).
+/// - Interrupted: the run was stopped by SIGINT/SIGTERM (runtime/cancel.h).
 /// - NodeError: any error raised inside a node, wrapped by the runtime with the node id and type.
 #pragma once
 
@@ -26,6 +27,9 @@ struct SolverError : Error {
   using Error::Error;
 };
 struct ConfigError : Error {
+  using Error::Error;
+};
+struct Interrupted : Error {
   using Error::Error;
 };
 /// Raised by the runtime when a node body throws; what() is "node `id` (`type`): <message>".

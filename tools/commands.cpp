@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <iostream>
+#include <memory>
 
 #include "nodes/io/hexmesh_io.h"
 #include "nodes/io/surface_io.h"
@@ -10,48 +11,83 @@
 
 namespace polyhex {
 
-void add_extra_commands(CLI::App& app, CommandOptions& o) {
-  o.check = app.add_subcommand("check", "quality of a hex mesh (.vtk/.mesh), optionally against its input surface");
-  o.check->add_option("mesh", o.check_mesh, "hex mesh file (.vtk legacy ASCII/BINARY or Medit .mesh)")->required();
-  o.check->add_option("--surface", o.check_surface, "input surface (.obj .off .stl .ply) for Hausdorff distances");
-  o.check->add_option("--samples", o.check_samples, "surface samples per side for the distances")->check(CLI::Range(100, 10000000));
-  o.check->add_flag("--json", o.check_json, "print the figures as JSON (keys as hexcheck.py --json)");
+CommandEnv& command_env() {
+  static CommandEnv env;
+  return env;
+}
 
+namespace {
+std::vector<CommandModule>& modules() {
+  static std::vector<CommandModule> m;
+  return m;
+}
+}  // namespace
+
+bool register_commands(CommandModule module) {
+  modules().push_back(std::move(module));
+  return true;
+}
+
+const std::vector<CommandModule>& command_modules() { return modules(); }
+
+namespace {
+
+// `polyhex check` (the quality node alone on a mesh file) and `polyhex shapes` (a built-in shape).
+struct CheckOptions {
+  std::string mesh, surface;
+  bool json = false;
+  int samples = 100000;
+};
+struct ShapeOptions {
+  std::string name, out;
+  int resolution = 64;
+};
+
+int run_check(const CheckOptions& o) {
+  HexMesh mesh = read_hexmesh(o.mesh);
+  SurfaceMesh surface;
+  if (!o.surface.empty()) surface = read_surface(o.surface);
+  QualityParams qp;
+  qp.samples = o.samples;
+  HexQuality q = hex_quality(mesh, o.surface.empty() ? nullptr : &surface, qp);
+  nlohmann::json j = to_json(q);
+  if (o.json) {
+    std::cout << j.dump() << "\n";
+  } else {
+    for (auto it = j.begin(); it != j.end(); ++it) std::printf("%-32s %s\n", it.key().c_str(), it.value().dump().c_str());
+  }
+  return q.inverted > 0 ? 3 : 0;
+}
+
+int run_shapes(const ShapeOptions& o) {
+  ShapeParams p;
+  p.name = o.name;
+  p.resolution = o.resolution;
+  SurfaceMesh m = make_shape(p);
+  write_surface(m, o.out);
+  std::fprintf(stderr, "polyhex: wrote %s (%ld vertices, %ld triangles)\n", o.out.c_str(), long(m.V.rows()),
+               long(m.F.rows()));
+  return 0;
+}
+
+const bool registered = register_commands([](CLI::App& app, std::vector<Command>& out) {
+  auto c = std::make_shared<CheckOptions>();
+  CLI::App* check = app.add_subcommand("check", "quality of a hex mesh (.vtk/.mesh), optionally against its input surface");
+  check->add_option("mesh", c->mesh, "hex mesh file (.vtk legacy ASCII/BINARY or Medit .mesh)")->required();
+  check->add_option("--surface", c->surface, "input surface (.obj .off .stl .ply) for Hausdorff distances");
+  check->add_option("--samples", c->samples, "surface samples per side for the distances")->check(CLI::Range(100, 10000000));
+  check->add_flag("--json", c->json, "print the figures as JSON (keys as hexcheck.py --json)");
+  out.push_back({check, [c] { return run_check(*c); }});
+
+  auto s = std::make_shared<ShapeOptions>();
   std::string names;
   for (auto& n : shape_names()) names += (names.empty() ? "" : ", ") + n;
-  o.shapes = app.add_subcommand("shapes", "write a built-in closed surface: " + names);
-  o.shapes->add_option("name", o.shape_name, "shape name")->required();
-  o.shapes->add_option("--out,-o", o.shape_out, "output surface file (.obj .off .vtk)")->required();
-  o.shapes->add_option("--resolution", o.shape_resolution, "samples along the longest side")->check(CLI::Range(8, 512));
-}
+  CLI::App* shapes = app.add_subcommand("shapes", "write a built-in closed surface: " + names);
+  shapes->add_option("name", s->name, "shape name")->required();
+  shapes->add_option("--out,-o", s->out, "output surface file (.obj .off .vtk)")->required();
+  shapes->add_option("--resolution", s->resolution, "samples along the longest side")->check(CLI::Range(8, 512));
+  out.push_back({shapes, [s] { return run_shapes(*s); }});
+});
 
-int run_extra_commands(const CLI::App& app, const CommandOptions& o) {
-  if (*o.check) {
-    HexMesh mesh = read_hexmesh(o.check_mesh);
-    SurfaceMesh surface;
-    if (!o.check_surface.empty()) surface = read_surface(o.check_surface);
-    QualityParams qp;
-    qp.samples = o.check_samples;
-    HexQuality q = hex_quality(mesh, o.check_surface.empty() ? nullptr : &surface, qp);
-    nlohmann::json j = to_json(q);
-    if (o.check_json) {
-      std::cout << j.dump() << "\n";
-    } else {
-      for (auto it = j.begin(); it != j.end(); ++it) std::printf("%-32s %s\n", it.key().c_str(), it.value().dump().c_str());
-    }
-    return q.inverted > 0 ? 3 : 0;
-  }
-  if (*o.shapes) {
-    ShapeParams p;
-    p.name = o.shape_name;
-    p.resolution = o.shape_resolution;
-    SurfaceMesh m = make_shape(p);
-    write_surface(m, o.shape_out);
-    std::fprintf(stderr, "polyhex: wrote %s (%ld vertices, %ld triangles)\n", o.shape_out.c_str(), long(m.V.rows()),
-                 long(m.F.rows()));
-    return 0;
-  }
-  return 2;
-}
-
+}  // namespace
 }  // namespace polyhex

@@ -9,7 +9,9 @@
 //   polyhex shapes NAME --out FILE                 (a built-in closed surface)
 //
 // Exit codes: 0 success, 1 a node failed (report.json says which), 2 bad command line or config,
-// 3 the result has inverted hexes.
+// 3 the result has inverted hexes, 130 interrupted (SIGINT/SIGTERM).
+//
+// Subcommands come from command modules (tools/commands.h): this file holds run, graph and nodes.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -18,6 +20,7 @@
 
 #include "graph/pipeline.h"
 #include "runtime/atomic_file.h"
+#include "runtime/cancel.h"
 #include "runtime/cli_run.h"
 #include "tools/commands.h"
 
@@ -35,6 +38,10 @@ void add_run_options(CLI::App* c, RunRequest& req) {
 int cmd_run(const RunRequest& req) {
   Pipeline p = load_pipeline(req);
   RunResult r = run_pipeline(p, req);
+  if (r.interrupted) {
+    std::fprintf(stderr, "polyhex: interrupted: %s; no mesh written\n", r.error.c_str());
+    return 130;
+  }
   if (!r.error.empty()) {
     std::fprintf(stderr, "polyhex: error: %s\n", r.error.c_str());
     std::fprintf(stderr, "polyhex: partial report in %s\n", (req.out_dir / "report.json").c_str());
@@ -54,56 +61,6 @@ int cmd_run(const RunRequest& req) {
     }
   }
   return code;
-}
-
-int cmd_bench(RunRequest req, int repeat, const std::string& json_path) {
-  Pipeline p = load_pipeline(req);
-  json runs = json::array();
-  std::map<std::string, std::vector<double>> times;
-  std::vector<double> totals;
-  json last_metrics = json::object();
-  for (int k = 0; k < repeat; ++k) {
-    RunResult r = run_pipeline(p, req);
-    if (!r.error.empty()) {
-      std::fprintf(stderr, "polyhex bench: run %d failed: %s\n", k + 1, r.error.c_str());
-      return 1;
-    }
-    totals.push_back(r.seconds);
-    for (auto& n : r.nodes) {
-      times[n.id].push_back(n.seconds);
-      last_metrics[n.id] = n.metrics;
-    }
-  }
-  auto median = [](std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v.empty() ? 0.0 : v[v.size() / 2];
-  };
-  json out;
-  out["config"] = req.config.string();
-  out["input"] = req.input;
-  out["repeat"] = repeat;
-  out["threads"] = req.threads;
-  out["total_seconds"] = totals;
-  out["total_median"] = median(totals);
-  json nodes = json::object();
-  std::printf("%-18s %-36s %10s %10s\n", "node", "type", "median s", "min s");
-  for (auto& n : p.nodes()) {
-    auto& t = times[n.id];
-    json j;
-    j["type"] = n.spec->type;
-    j["seconds"] = t;
-    j["median"] = median(t);
-    j["min"] = t.empty() ? 0.0 : *std::min_element(t.begin(), t.end());
-    j["metrics"] = last_metrics[n.id];
-    nodes[n.id] = j;
-    std::printf("%-18s %-36s %10.3f %10.3f\n", n.id.c_str(), n.spec->type.c_str(), j["median"].get<double>(),
-                j["min"].get<double>());
-  }
-  out["nodes"] = nodes;
-  std::printf("%-18s %-36s %10.3f\n", "total", "", median(totals));
-  if (!json_path.empty()) write_file_atomic(json_path, [&](std::ostream& o) { o << out.dump(2) << "\n"; });
-  else std::cout << out.dump(2) << "\n";
-  return 0;
 }
 
 int cmd_nodes(bool as_json) {
@@ -137,66 +94,57 @@ int cmd_nodes(bool as_json) {
   return 0;
 }
 
+const bool registered = register_commands([](CLI::App& app, std::vector<Command>& out) {
+  auto run_req = std::make_shared<RunRequest>();
+  auto* run = app.add_subcommand("run", "run a pipeline config; writes OUT/report.json and the writers' files");
+  add_run_options(run, *run_req);
+  run->add_option("--out,-o", run_req->out_dir, "output folder (default polyhex-out)");
+  run->add_flag("--save-all", run_req->save_all, "also write every mesh artefact as OUT/<node id>.<ext>");
+  out.push_back({run, [run_req] {
+                   run_req->verbosity = command_env().verbosity;
+                   return cmd_run(*run_req);
+                 }});
+
+  auto graph_req = std::make_shared<RunRequest>();
+  auto* graph = app.add_subcommand("graph", "print the pipeline as Graphviz DOT");
+  graph->add_option("config", graph_req->config, "pipeline config (JSON)")->required();
+  graph->add_option("--input,-i", graph_req->input, "value of ${input}");
+  graph->add_option("--set,-s", graph_req->sets, "override a param: id.param=value");
+  out.push_back({graph, [graph_req] {
+                   std::cout << load_pipeline(*graph_req).dot();
+                   return 0;
+                 }});
+
+  auto nodes_json = std::make_shared<bool>(false);
+  auto* nodes = app.add_subcommand("nodes", "list registered node types, their ports and params");
+  nodes->add_flag("--json", *nodes_json, "as JSON");
+  out.push_back({nodes, [nodes_json] { return cmd_nodes(*nodes_json); }});
+});
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"polyhex " POLYHEX_VERSION ": all-hex meshes by volumetric PolyCube deformation"};
   app.require_subcommand(1);
-  int verbosity = 0;
-  app.add_flag("-v,--verbose", verbosity, "more detail (repeatable)");
-
-  RunRequest run_req;
-  auto* run = app.add_subcommand("run", "run a pipeline config; writes OUT/report.json and the writers' files");
-  add_run_options(run, run_req);
-  run->add_option("--out,-o", run_req.out_dir, "output folder (default polyhex-out)");
-  run->add_flag("--save-all", run_req.save_all, "also write every mesh artefact as OUT/<node id>.<ext>");
-
-  RunRequest bench_req;
-  int repeat = 3;
-  std::string bench_json;
-  auto* bench = app.add_subcommand("bench", "run a config several times; per-node wall times as JSON and a table");
-  add_run_options(bench, bench_req);
-  bench->add_option("--out,-o", bench_req.out_dir, "output folder of the runs (default polyhex-bench)");
-  bench->add_option("--repeat,-r", repeat, "number of runs (default 3)")->check(CLI::Range(1, 1000));
-  bench->add_option("--json", bench_json, "write the JSON here (default: stdout)");
-  bench_req.out_dir = "polyhex-bench";
-
-  RunRequest graph_req;
-  auto* graph = app.add_subcommand("graph", "print the pipeline as Graphviz DOT");
-  graph->add_option("config", graph_req.config, "pipeline config (JSON)")->required();
-  graph->add_option("--input,-i", graph_req.input, "value of ${input}");
-  graph->add_option("--set,-s", graph_req.sets, "override a param: id.param=value");
-
-  bool nodes_json = false;
-  auto* nodes = app.add_subcommand("nodes", "list registered node types, their ports and params");
-  nodes->add_flag("--json", nodes_json, "as JSON");
-
-  CommandOptions extra;
-  add_extra_commands(app, extra);
-
+  app.add_flag("-v,--verbose", command_env().verbosity, "more detail (repeatable)");
+  std::vector<Command> commands;
+  for (const CommandModule& m : command_modules()) m(app, commands);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
+  install_interrupt_handlers();
   try {
-    if (*run) {
-      run_req.verbosity = verbosity;
-      return cmd_run(run_req);
-    }
-    if (*bench) {
-      bench_req.verbosity = verbosity;
-      return cmd_bench(bench_req, repeat, bench_json);
-    }
-    if (*graph) {
-      std::cout << load_pipeline(graph_req).dot();
-      return 0;
-    }
-    if (*nodes) return cmd_nodes(nodes_json);
-    return run_extra_commands(app, extra);
+    for (const Command& c : commands)
+      if (c.sub->parsed()) return c.run();
+    return 2;
   } catch (const ConfigError& e) {
     std::fprintf(stderr, "polyhex: config error: %s\n", e.what());
     return 2;
+  } catch (const Interrupted& e) {
+    std::fprintf(stderr, "polyhex: %s\n", e.what());
+    return 130;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "polyhex: error: %s\n", e.what());
     return 1;
