@@ -253,12 +253,19 @@ struct NodeSpec {
   std::function<json(const json& params, const std::string& where)> check_params;
   /// Run on canonical params. Exceptions propagate to the runtime which wraps them in NodeError.
   std::function<Artefact(const json& params, const Inputs& in, NodeContext& ctx)> run;
+  /// Files the node reads besides its inputs (e.g. a reader's `path`), given its canonical params: their
+  /// contents are part of the cache key. Empty function = none.
+  std::function<std::vector<std::filesystem::path>(const json& params)> input_files;
   /// Code version of the node, part of its cache key: bump it when the algorithm's output changes.
   std::string version = "1";
   std::string stage() const { return type.substr(0, type.find('/')); }
   /// `register_node(make_node<P>(...).with_version("2"))`
   NodeSpec with_version(std::string v) && {
     version = std::move(v);
+    return std::move(*this);
+  }
+  NodeSpec with_input_files(std::function<std::vector<std::filesystem::path>(const json&)> f) && {
+    input_files = std::move(f);
     return std::move(*this);
   }
 };

@@ -41,6 +41,16 @@ std::filesystem::path output_path(const std::string& path, const NodeContext& ct
   return p;
 }
 
+// The files a reader reads, for the cache key: `path` (none for shape:NAME); a TetGen .node/.ele pair both.
+std::vector<std::filesystem::path> reader_files(const json& params) {
+  std::string path = params.value("path", "");
+  if (path.empty() || path.rfind("shape:", 0) == 0) return {};
+  std::filesystem::path p(path);
+  if (p.extension() == ".node" || p.extension() == ".ele")
+    return {std::filesystem::path(p).replace_extension(".node"), std::filesystem::path(p).replace_extension(".ele")};
+  return {p};
+}
+
 const bool registered_read_surface = register_node(make_node<ReadSurfaceParams>(
     "read_surface", "Reads and checks a closed triangle surface (OBJ, OFF, STL, PLY, or shape:NAME)",
     ParamSet<ReadSurfaceParams>().add("path", &ReadSurfaceParams::path, "surface file, or shape:NAME"), {},
@@ -56,7 +66,7 @@ const bool registered_read_surface = register_node(make_node<ReadSurfaceParams>(
       ctx.metrics["components"] = r.components;
       for (auto& w : r.warnings) ctx.warn(w);
       return make_artefact(std::move(m));
-    }));
+    }).with_input_files(reader_files));
 
 const bool registered_read_tetmesh = register_node(make_node<ReadTetmeshParams>(
     "read_tetmesh", "Reads a tet mesh (Medit .mesh, legacy VTK, Gmsh .msh 2.2/4.1, TetGen .node/.ele)",
@@ -70,7 +80,7 @@ const bool registered_read_tetmesh = register_node(make_node<ReadTetmeshParams>(
       ctx.metrics["reoriented"] = r.reoriented;
       for (auto& w : r.warnings) ctx.warn(w);
       return make_artefact(std::move(m));
-    }));
+    }).with_input_files(reader_files));
 
 // write_hex and write_tetmesh: the same sink for a mesh type M written by `write`.
 template <class M, class P>
