@@ -642,8 +642,12 @@ int run_sweep(const SweepOptions& o) {
                 fig("inverted").c_str(), fig("sj_min").c_str());
     if (row["status"] != "ok") ++failed;
   }
-  std::fprintf(stderr, "polyhex sweep: %d of %zu cases failed; %s and %s\n", failed, plan.cases.size(),
-               (o.out_dir / "sweep.csv").c_str(), (o.out_dir / "sweep.json").c_str());
+  std::map<std::string, int> by_status;
+  for (const json& row : summary["cases"]) ++by_status[row["status"].get<std::string>()];
+  std::string counts;
+  for (auto& [status, n] : by_status) counts += (counts.empty() ? "" : ", ") + std::to_string(n) + " " + status;
+  std::fprintf(stderr, "polyhex sweep: %s%zu cases: %s; %s and %s\n", was_interrupted ? "interrupted; " : "",
+               plan.cases.size(), counts.c_str(), (o.out_dir / "sweep.csv").c_str(), (o.out_dir / "sweep.json").c_str());
   return was_interrupted ? 130 : failed ? 1 : 0;
 }
 

@@ -4,6 +4,8 @@
 // cases' report.json, never required.
 #include <catch2/catch.hpp>
 
+#include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -11,6 +13,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <thread>
 #include <string>
 #include <vector>
 
@@ -341,5 +344,39 @@ TEST_CASE("sweep: a failing case is reported, the others still run, the exit cod
   CHECK(rows[1][column(h, "surface.path")] == kCube);
   CHECK(rows[1][column(h, "tets.edge_length")] == "0.12");  // effective value of a case that sets nothing
   CHECK(rows[3][column(h, "tets.edge_length")] == "0.2");
-  CHECK_THAT(r.err, Contains("1 of 3 cases failed"));
+  CHECK_THAT(r.err, Contains("3 cases: 1 error, 2 ok"));
+}
+
+TEST_CASE("sweep: SIGTERM stops the running cases at a safe point, starts no more, writes the summary", "[sweep]") {
+  const fs::path dir = scratch("interrupt"), out = dir / "out";
+  const std::string first = "rotate.anchor_weight=0.5,rotate.feature_angle=45";
+  const pid_t pid = ::fork();
+  REQUIRE(pid >= 0);
+  if (pid == 0) {
+    std::freopen((dir / "stderr.txt").c_str(), "w", stderr);
+    std::freopen((dir / "stdout.txt").c_str(), "w", stdout);
+    ::execl(POLYHEX_BINARY, POLYHEX_BINARY, "sweep", config("rotation.json").c_str(), "--out", out.c_str(), "--jobs", "1",
+            "--threads", "1", "--set", "surface.resolution=24", "--set", "tets.edge_length=0.06", static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  // Wait until the first case runs, then stop the sweep (its children are in their own process group).
+  for (int k = 0; k < 300 && !fs::exists(out / first / "log.txt"); ++k) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  ::kill(pid, SIGTERM);
+  int status = 0;
+  REQUIRE(::waitpid(pid, &status, 0) == pid);
+  const std::string err = slurp(dir / "stderr.txt");
+  INFO(err);
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 130);
+  const json s = json::parse(slurp(out / "sweep.json"));
+  CHECK(s["status"] == "interrupted");
+  REQUIRE(s["cases"].size() == 6);
+  CHECK(s["cases"][0]["status"] == "interrupted");
+  CHECK_THAT(s["cases"][0]["error"].get<std::string>(), Contains("interrupted by SIGTERM"));
+  for (size_t c = 1; c < 6; ++c) {
+    CHECK(s["cases"][c]["status"] == "not_run");
+    CHECK_FALSE(fs::exists(out / s["cases"][c]["name"].get<std::string>()));
+  }
+  CHECK_THAT(err, Contains("interrupted; 6 cases: 1 interrupted, 5 not_run"));
 }
