@@ -1,5 +1,6 @@
 // Hex mesh optimization (paper §6): untangle, max-min scaled Jacobian, shape improvement. See optimize.h.
 #include "nodes/optimize/optimize.h"
+#include "nodes/optimize/untangle_global.h"
 
 #include <tbb/parallel_for.h>
 
@@ -14,6 +15,7 @@
 
 #include "nodes/quality/quality.h"
 #include "nodes/quality/triangle_tree.h"
+#include "runtime/cancel.h"
 #include "runtime/errors.h"
 
 namespace polyhex {
@@ -63,6 +65,11 @@ class Optimizer {
 
   HexMesh run(const std::string& source) {
     released_.assign(size_t(V_.rows()), 0);
+    // local sweeps first (cheap, they untangle most hexes with little motion), then the global descent
+    // for the folds that need several vertices to move together, then local sweeps again
+    untangle();
+    global_untangle();
+    st_.inverted_after_global = p_.global_iterations > 0 ? count_inverted() : -1;
     untangle();
     if (p_.release_boundary && count_inverted() > 0) {
       // Last resort: a hex squeezed against the surface (typically at a sharp or concave feature the
@@ -259,6 +266,7 @@ class Optimizer {
   long sweep(const std::vector<char>& selected, Step step) {
     std::atomic<long> moved{0};
     for (const auto& cls : classes_) {
+      throw_if_interrupted();
       if (out_of_time()) break;
       tbb::parallel_for(size_t(0), cls.size(), [&](size_t i) {
         const int v = cls[i];
@@ -281,11 +289,39 @@ class Optimizer {
     return n;
   }
 
-  // (a) untangling
+  // (a) untangling: all free vertices near the inverted hexes at once (L-BFGS), then vertex by vertex
+  /// Kept only if it lowers the number of inverted hexes (a failed global descent spreads distortion).
+  void global_untangle() {
+    if (p_.global_iterations <= 0 || out_of_time()) return;
+    const long before = count_inverted();
+    if (before == 0) return;
+    const RowMatrixX3d keep = V_;
+    std::vector<char> surf(size_t(V_.rows())), fixed(size_t(V_.rows()));
+    for (size_t v = 0; v < size_t(V_.rows()); ++v) {
+      surf[v] = on_surface(int(v));
+      fixed[v] = !movable(int(v));
+    }
+    GlobalUntangleParams gp;
+    gp.outer_iterations = p_.global_iterations;
+    gp.rings = p_.global_rings;
+    GlobalUntangleStats gs;
+    untangle_global(V_, H_, surf, fixed, tree_, normals_, gp, &gs);
+    if (count_inverted() >= before) V_ = keep;
+    st_.global_outer += gs.outer;
+    st_.global_lbfgs_iterations += gs.lbfgs_iterations;
+    st_.global_free_vertices += gs.free_vertices;
+  }
+
   void untangle() {
-    for (int it = 0; it < p_.untangle_iterations && !out_of_time(); ++it) {
+    long best = std::numeric_limits<long>::max();
+    for (int it = 0, stall = 0; it < p_.untangle_iterations && !out_of_time(); ++it) {
+      throw_if_interrupted();
       double dmin = 0;
-      if (count_inverted(&dmin) == 0) return;
+      const long n = count_inverted(&dmin);
+      if (n == 0) return;
+      // stalled: the count has not improved for 20 sweeps (the global descent takes over)
+      if (n < best) best = n, stall = 0;
+      else if (++stall >= 20) return;
       const double eps = std::sqrt(1e-8 + 0.04 * std::min(dmin, 0.0) * std::min(dmin, 0.0));
       // vertices of inverted hexes and of the hexes around them
       std::vector<char> sel(size_t(V_.rows()), 0);

@@ -8,7 +8,11 @@
 ///      regularised Winslow energy of the "foldover-free maps" line of work (Garanzha et al. 2021),
 ///      Σ_corners |J|_F² / (3 χ(det J, ε)^{2/3}), χ(D, ε) = (D + sqrt(ε² + D²)) / 2, J the corner's three
 ///      edge vectors over the local edge length, ε shrinking with the most negative corner determinant;
-///      finite for inverted corners, so the descent walks out of the fold;
+///      finite for inverted corners, so the descent walks out of the fold; the sweeps stop when the
+///      count of inverted hexes stalls for 20 sweeps, then the vertices around the remaining inverted
+///      hexes move all at once by L-BFGS on the same energy (untangle_global.h: a hex folded against the
+///      surface needs several vertices to move together, which one-vertex moves cannot do), kept only if
+///      it lowers the count, then the sweeps again;
 ///  (b) max-min: move each vertex whose incident hexes are below `target_sj` to maximise the minimum
 ///      scaled Jacobian (Verdict, centre term included) of its incident hexes: gradient of a soft minimum,
 ///      backtracking line search, plus the average of its edge neighbours as a candidate;
@@ -28,6 +32,8 @@
 namespace polyhex {
 
 struct OptimizeParams {
+  int global_iterations = 15;      ///< ε updates of the global L-BFGS untangling (untangle_global.h), 0 = off, [0, 1000]
+  int global_rings = 3;            ///< global untangling frees the inverted hexes' vertices grown by this many rings, [0, 50]
   int untangle_iterations = 200;   ///< max untangling sweeps, [0, 10000]
   int iterations = 30;             ///< max max-min sweeps, [0, 10000]
   int shape_iterations = 10;       ///< global shape-improvement sweeps, [0, 10000]
@@ -43,6 +49,10 @@ struct OptimizeStats {
   double sj_min_after = 0, sj_avg_after = 0;
   long inverted_before = 0, inverted_after = 0;   ///< hexes with corner scaled Jacobian <= 0
   int untangle_sweeps = 0, maxmin_sweeps = 0, shape_sweeps = 0;
+  int global_outer = 0;                ///< ε updates of the global untangling
+  long global_lbfgs_iterations = 0;    ///< its L-BFGS iterations
+  long global_free_vertices = 0;       ///< vertices it moved (all runs)
+  long inverted_after_global = -1;     ///< inverted hexes after the first global untangling (-1: not run)
   int iterations = 0;                  ///< all sweeps
   long moves = 0;                      ///< accepted vertex moves
   int colours = 0;

@@ -13,6 +13,10 @@ const bool registered = register_node(make_node<P>(
     "§6 optimization: untangle (regularised Winslow energy), per-vertex max-min scaled Jacobian, global shape "
     "improvement; boundary vertices stay on the input surface",
     ParamSet<P>()
+        .add("global_iterations", &P::global_iterations, "eps updates of the global L-BFGS untangling (0 = off)", 0,
+             1000)
+        .add("global_rings", &P::global_rings, "global untangling frees the inverted hexes' vertices grown by this many rings",
+             0, 50)
         .add("untangle_iterations", &P::untangle_iterations, "max untangling sweeps", 0, 10000)
         .add("iterations", &P::iterations, "max max-min scaled Jacobian sweeps", 0, 10000)
         .add("shape_iterations", &P::shape_iterations, "global shape-improvement sweeps", 0, 10000)
@@ -34,6 +38,10 @@ const bool registered = register_node(make_node<P>(
       j["sj_min"] = s.sj_min_after;
       j["sj_avg"] = s.sj_avg_after;
       j["inverted"] = s.inverted_after;
+      j["global_outer"] = s.global_outer;
+      j["global_lbfgs_iterations"] = s.global_lbfgs_iterations;
+      j["inverted_after_global"] = s.inverted_after_global;
+      j["global_free_vertices"] = s.global_free_vertices;
       j["untangle_sweeps"] = s.untangle_sweeps;
       j["maxmin_sweeps"] = s.maxmin_sweeps;
       j["shape_sweeps"] = s.shape_sweeps;

@@ -120,7 +120,7 @@ TEST_CASE("the optimize node never hands out an inverted hex silently", "[optimi
   NodeContext ctx;
   ctx.id = "opt";
   json params = spec->check_params(
-      json{{"untangle_iterations", 0}, {"iterations", 0}, {"shape_iterations", 0}, {"release_boundary", false}}, "opt");
+      json{{"untangle_iterations", 0}, {"global_iterations", 0}, {"iterations", 0}, {"shape_iterations", 0}, {"release_boundary", false}}, "opt");
   Artefact out = spec->run(params, in, ctx);
   CHECK(out.as<HexMesh>()->H.rows() == 27);
   CHECK(ctx.metrics["inverted"].get<long>() > 0);
@@ -140,9 +140,22 @@ TEST_CASE("boundary vertices are released from the surface only for hexes still 
   CHECK(st.inverted_after == 0);
   CHECK(st.released_vertices == 0);
   CHECK(st.boundary_distance_max < 1e-9);
+  // The global descent alone (no sweeps) untangles it too, without releasing the boundary.
+  OptimizeParams global_only;
+  global_only.untangle_iterations = 0;
+  global_only.iterations = 0;
+  global_only.shape_iterations = 0;
+  OptimizeStats st3;
+  optimize_hexes(g, test::voxel_surface(test::voxel_box(3, 3, 3)), global_only, &st3);
+  CHECK(st3.inverted_after_global == 0);
+  CHECK(st3.inverted_after == 0);
+  CHECK(st3.global_outer > 0);
+  CHECK(st3.released_vertices == 0);
+  CHECK(st3.boundary_distance_max < 1e-9);
   // With no untangling sweep allowed the release marks the boundary corners of the inverted hexes.
   OptimizeParams none;
   none.untangle_iterations = 0;
+  none.global_iterations = 0;
   none.iterations = 0;
   none.shape_iterations = 0;
   OptimizeStats st2;

@@ -1,0 +1,402 @@
+// Global untangling by L-BFGS on the regularised Winslow energy. See untangle_global.h.
+#include "nodes/optimize/untangle_global.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <vector>
+
+#include "nodes/quality/quality.h"
+#include "runtime/cancel.h"
+
+namespace polyhex {
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+using Mat83 = Eigen::Matrix<double, 8, 3>;
+using VecX = Eigen::VectorXd;
+
+/// W[t] (8 by 3): the t-th Jacobian of a hex is J_t = P^T W[t], P the 8 by 3 corner positions
+/// (VTK_HEXAHEDRON order); t < 8 the corners (edge vectors ordered for a positive determinant),
+/// t = 8 the centre principal axes (Verdict), each a mean of four parallel edges.
+std::array<Mat83, 9> make_weights() {
+  constexpr int kCorner[8][4] = {{0, 1, 3, 4}, {1, 2, 0, 5}, {2, 3, 1, 6}, {3, 0, 2, 7},
+                                 {4, 7, 5, 0}, {5, 4, 6, 1}, {6, 5, 7, 2}, {7, 6, 4, 3}};
+  std::array<Mat83, 9> W;
+  for (int t = 0; t < 8; ++t) {
+    W[size_t(t)].setZero();
+    for (int c = 0; c < 3; ++c) {
+      W[size_t(t)](kCorner[t][c + 1], c) += 1;
+      W[size_t(t)](kCorner[t][0], c) -= 1;
+    }
+  }
+  // centre: X1 = (p1-p0)+(p2-p3)+(p5-p4)+(p6-p7), X2 = (p3-p0)+(p2-p1)+(p7-p4)+(p6-p5),
+  //         X3 = (p4-p0)+(p5-p1)+(p6-p2)+(p7-p3), each over 4
+  constexpr int kAxis[3][4][2] = {{{1, 0}, {2, 3}, {5, 4}, {6, 7}},
+                                  {{3, 0}, {2, 1}, {7, 4}, {6, 5}},
+                                  {{4, 0}, {5, 1}, {6, 2}, {7, 3}}};
+  W[8].setZero();
+  for (int c = 0; c < 3; ++c)
+    for (const auto& e : kAxis[c]) {
+      W[8](e[0], c) += 0.25;
+      W[8](e[1], c) -= 0.25;
+    }
+  return W;
+}
+
+const std::array<Mat83, 9>& weights() {
+  static const std::array<Mat83, 9> W = make_weights();
+  return W;
+}
+
+double chi(double d, double eps) { return 0.5 * (d + std::sqrt(eps * eps + d * d)); }
+
+/// |J|² / (3 χ(det J)^{2/3}) and, if dJ, its gradient with respect to J.
+double winslow_term(const Eigen::Matrix3d& J, double eps, Eigen::Matrix3d* dJ) {
+  const double D = J.determinant();
+  const double c = chi(D, eps);
+  const double c23 = std::cbrt(c * c);
+  const double n2 = J.squaredNorm();
+  if (dJ) {
+    Eigen::Matrix3d cof;  // d det / dJ
+    cof.col(0) = J.col(1).cross(J.col(2));
+    cof.col(1) = J.col(2).cross(J.col(0));
+    cof.col(2) = J.col(0).cross(J.col(1));
+    const double dchi = 0.5 * (1.0 + D / std::sqrt(eps * eps + D * D));
+    *dJ = (2.0 / (3.0 * c23)) * J - (2.0 / 9.0) * n2 / (c23 * c) * dchi * cof;
+  }
+  return n2 / (3.0 * c23);
+}
+
+/// Energy of the hex with corners P (8 by 3, already over the scale) and its gradient G with respect to P.
+double hex_energy(const Mat83& P, double eps, Mat83* G) {
+  double e = 0;
+  if (G) G->setZero();
+  Eigen::Matrix3d dJ;
+  for (const auto& W : weights()) {
+    e += winslow_term(P.transpose() * W, eps, G ? &dJ : nullptr);
+    if (G) *G += W * dJ.transpose();
+  }
+  return e;
+}
+
+/// The free vertices near the inverted hexes and the data of one global descent.
+class GlobalUntangler {
+ public:
+  GlobalUntangler(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,
+                  const std::vector<char>& fixed, const TriangleTree& tree, const std::vector<Vec3>& normals,
+                  const GlobalUntangleParams& p, GlobalUntangleStats& st)
+      : V_(V), H_(H), on_surface_(on_surface), fixed_(fixed), tree_(tree), normals_(normals), p_(p), st_(st) {}
+
+  long run() {
+    const Eigen::Index nv = V_.rows(), nh = H_.rows();
+    std::vector<char> inv(size_t(nh), 0);
+    tbb::parallel_for(Eigen::Index(0), nh, [&](Eigen::Index h) { inv[size_t(h)] = inverted(h); });
+    st_.inverted_before = std::count(inv.begin(), inv.end(), 1);
+    st_.inverted_after = st_.inverted_before;
+    if (st_.inverted_before == 0 || p_.outer_iterations == 0) return st_.inverted_after;
+    select(inv, nv, nh);
+    if (free_.empty()) return st_.inverted_after;
+
+    double mindet = min_det();
+    double eps = std::sqrt(1e-12 + 0.04 * std::min(mindet, 0.0) * std::min(mindet, 0.0));
+    for (int it = 0; it < p_.outer_iterations; ++it) {
+      throw_if_interrupted();
+      ++st_.outer;
+      set_base();
+      VecX x = VecX::Zero(ndof_);
+      const double e_prev = energy(x, eps, nullptr);
+      const bool untangled = lbfgs(x, eps, true, p_.lbfgs_iterations);
+      apply(x);
+      project();
+      st_.inverted_after = count_inverted();
+      if (untangled || st_.inverted_after == 0) break;
+      set_base();
+      const double e = energy(VecX::Zero(ndof_), eps, nullptr);
+      mindet = min_det();
+      // ε update of Garanzha et al. 2021: shrink with the achieved relative decrease
+      const double sigma = std::max(1.0 - e / e_prev, 0.1);
+      const double mu = (1.0 - sigma) * chi(mindet, eps);
+      eps = mindet < mu ? 2.0 * std::sqrt(mu * (mu - mindet)) : 1e-10;
+    }
+    if (st_.inverted_after == 0) polish();
+    return st_.inverted_after;
+  }
+
+ private:
+  /// L-BFGS at ε -> 0 from an untangled mesh; undone if the projection onto the surface inverts a hex.
+  void polish() {
+    if (p_.polish_iterations <= 0) return;
+    set_base();
+    const std::vector<Vec3> keep = base_;
+    VecX x = VecX::Zero(ndof_);
+    lbfgs(x, 1e-10, false, p_.polish_iterations);
+    apply(x);
+    project();
+    if (count_inverted() == 0) return;
+    for (size_t i = 0; i < free_.size(); ++i) V_.row(free_[i]) = keep[i].transpose();
+  }
+
+  std::array<Vec3, 8> points(Eigen::Index h) const {
+    std::array<Vec3, 8> q;
+    for (int k = 0; k < 8; ++k) q[size_t(k)] = V_.row(H_(h, k)).transpose();
+    return q;
+  }
+  bool inverted(Eigen::Index h) const { return hex_scaled_jacobian(points(h)).corner_min <= 0; }
+
+  long count_inverted() const {
+    std::vector<char> inv(active_.size());
+    tbb::parallel_for(size_t(0), active_.size(), [&](size_t a) { inv[a] = inverted(active_[a]); });
+    return long(std::count(inv.begin(), inv.end(), 1));
+  }
+
+  /// Free vertices: those of the inverted hexes grown by p_.rings rings; active hexes: those with a free vertex.
+  void select(const std::vector<char>& inv, Eigen::Index nv, Eigen::Index nh) {
+    std::vector<char> region(size_t(nv), 0);
+    for (Eigen::Index h = 0; h < nh; ++h)
+      if (inv[size_t(h)])
+        for (int k = 0; k < 8; ++k) region[size_t(H_(h, k))] = 1;
+    for (int r = 0; r < p_.rings; ++r) {
+      std::vector<char> grown = region;
+      for (Eigen::Index h = 0; h < nh; ++h) {
+        bool touch = false;
+        for (int k = 0; k < 8 && !touch; ++k) touch = region[size_t(H_(h, k))];
+        if (touch)
+          for (int k = 0; k < 8; ++k) grown[size_t(H_(h, k))] = 1;
+      }
+      region.swap(grown);
+    }
+    dof_.assign(size_t(nv), -1);
+    ndof_ = 0;
+    for (Eigen::Index v = 0; v < nv; ++v)
+      if (region[size_t(v)] && !fixed_[size_t(v)]) {
+        dof_[size_t(v)] = int(ndof_);
+        ndof_ += on_surface_[size_t(v)] ? 2 : 3;
+        free_.push_back(int(v));
+      }
+    st_.free_vertices = long(free_.size());
+    active_index_.assign(size_t(nh), -1);
+    for (Eigen::Index h = 0; h < nh; ++h) {
+      bool any = false;
+      for (int k = 0; k < 8 && !any; ++k) any = dof_[size_t(H_(h, k))] >= 0;
+      if (!any) continue;
+      active_index_[size_t(h)] = int(active_.size());
+      active_.push_back(int(h));
+      // the hex's mean edge length: the unit of its Jacobians
+      static constexpr int kEdges[12][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6},
+                                            {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
+      double s = 0;
+      for (const auto& e : kEdges) s += (V_.row(H_(h, e[0])) - V_.row(H_(h, e[1]))).norm();
+      scale_.push_back(s > 0 ? s / 12.0 : 1.0);
+    }
+    // incident active hexes of each free vertex (fixed order: by hex index)
+    start_.assign(free_.size() + 1, 0);
+    for (size_t i = 0; i < free_.size(); ++i) start_[i + 1] = start_[i];
+    std::vector<std::vector<std::pair<int, int>>> inc(free_.size());
+    std::vector<int> slot(size_t(nv), -1);
+    for (size_t i = 0; i < free_.size(); ++i) slot[size_t(free_[i])] = int(i);
+    for (size_t a = 0; a < active_.size(); ++a)
+      for (int k = 0; k < 8; ++k) {
+        const int s = slot[size_t(H_(active_[a], k))];
+        if (s >= 0) inc[size_t(s)].push_back({int(a), k});
+      }
+    for (size_t i = 0; i < free_.size(); ++i) {
+      start_[i + 1] = start_[i] + int(inc[i].size());
+      corners_.insert(corners_.end(), inc[i].begin(), inc[i].end());
+    }
+    hex_energy_.assign(active_.size(), 0.0);
+    hex_grad_.assign(active_.size(), Mat83::Zero());
+  }
+
+  /// Base positions and tangent frames of the free vertices (x = 0 is the current mesh).
+  void set_base() {
+    base_.resize(free_.size());
+    frame_.resize(free_.size());
+    for (size_t i = 0; i < free_.size(); ++i) {
+      const int v = free_[i];
+      base_[i] = V_.row(v).transpose();
+      if (!on_surface_[size_t(v)]) continue;
+      const Vec3 n = normals_[size_t(tree_.closest(base_[i]).triangle)];
+      const Vec3 t1 = (std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(n).normalized();
+      frame_[i].col(0) = t1;
+      frame_[i].col(1) = n.cross(t1);
+    }
+  }
+
+  void apply(const VecX& x) {
+    for (size_t i = 0; i < free_.size(); ++i) {
+      const int v = free_[i], d = dof_[size_t(v)];
+      const Vec3 pos = on_surface_[size_t(v)] ? Vec3(base_[i] + frame_[i] * x.segment<2>(d))
+                                              : Vec3(base_[i] + x.segment<3>(d));
+      V_.row(v) = pos.transpose();
+    }
+  }
+
+  void project() {
+    tbb::parallel_for(size_t(0), free_.size(), [&](size_t i) {
+      const int v = free_[i];
+      if (on_surface_[size_t(v)]) V_.row(v) = tree_.closest(V_.row(v).transpose()).point.transpose();
+    });
+  }
+
+  /// Minimum normalised determinant over the 9 Jacobians of the active hexes.
+  double min_det() const {
+    std::vector<double> m(active_.size(), std::numeric_limits<double>::infinity());
+    tbb::parallel_for(size_t(0), active_.size(), [&](size_t a) {
+      Mat83 P;
+      for (int k = 0; k < 8; ++k) P.row(k) = V_.row(H_(active_[a], k)) / scale_[a];
+      for (const auto& W : weights()) m[a] = std::min(m[a], (P.transpose() * W).determinant());
+    });
+    return *std::min_element(m.begin(), m.end());
+  }
+
+  /// Energy at x (displacements of the free vertices) and, if g, its gradient.
+  double energy(const VecX& x, double eps, VecX* g) {
+    apply(x);
+    tbb::parallel_for(size_t(0), active_.size(), [&](size_t a) {
+      Mat83 P;
+      for (int k = 0; k < 8; ++k) P.row(k) = V_.row(H_(active_[a], k)) / scale_[a];
+      Mat83 G;
+      hex_energy_[a] = hex_energy(P, eps, g ? &G : nullptr);
+      if (g) hex_grad_[a] = G / scale_[a];
+    });
+    double e = 0;
+    for (double he : hex_energy_) e += he;
+    if (g) {
+      g->setZero(ndof_);
+      tbb::parallel_for(size_t(0), free_.size(), [&](size_t i) {
+        Vec3 gv = Vec3::Zero();
+        for (int c = start_[i]; c < start_[i + 1]; ++c)
+          gv += hex_grad_[size_t(corners_[size_t(c)].first)].row(corners_[size_t(c)].second).transpose();
+        const int v = free_[i], d = dof_[size_t(v)];
+        if (on_surface_[size_t(v)])
+          g->segment<2>(d) = frame_[i].transpose() * gv;
+        else
+          g->segment<3>(d) = gv;
+      });
+    }
+    return e;
+  }
+
+  /// True if the mesh at x, its surface vertices projected, has no inverted active hex (V_ is left at x).
+  bool untangled_at(const VecX& x) {
+    apply(x);
+    project();
+    const bool ok = count_inverted() == 0;
+    apply(x);
+    return ok;
+  }
+
+  /// L-BFGS (two-loop recursion, memory 8) with a backtracking Armijo line search, from x. Stops early,
+  /// returning true, when the mesh (projected) is untangled: the later phases improve the quality.
+  bool lbfgs(VecX& x, double eps, bool stop_when_untangled, int iterations) {
+    constexpr int kMemory = 8;
+    std::deque<VecX> S, Y;
+    VecX g(ndof_), gn(ndof_);
+    double e = energy(x, eps, &g);
+    double mean_scale = 0;
+    for (double s : scale_) mean_scale += s;
+    mean_scale /= double(scale_.size());
+    for (int it = 0; it < iterations; ++it) {
+      throw_if_interrupted();
+      ++st_.lbfgs_iterations;
+      const double gmax = g.lpNorm<Eigen::Infinity>();
+      if (!(gmax > 1e-10 / mean_scale)) return false;
+      VecX d = -g;
+      std::vector<double> alpha(S.size());
+      for (int i = int(S.size()) - 1; i >= 0; --i) {
+        alpha[size_t(i)] = S[size_t(i)].dot(d) / Y[size_t(i)].dot(S[size_t(i)]);
+        d -= alpha[size_t(i)] * Y[size_t(i)];
+      }
+      if (!S.empty()) d *= S.back().dot(Y.back()) / Y.back().squaredNorm();
+      for (size_t i = 0; i < S.size(); ++i) {
+        const double beta = Y[i].dot(d) / Y[i].dot(S[i]);
+        d += (alpha[i] - beta) * S[i];
+      }
+      double slope = g.dot(d);
+      if (!(slope < 0)) {  // not a descent direction: restart from steepest descent
+        S.clear();
+        Y.clear();
+        d = -g;
+        slope = g.dot(d);
+      }
+      // first step of a steepest descent: a tenth of an edge for the largest move
+      double step = S.empty() ? std::min(1.0, 0.1 * mean_scale / d.lpNorm<Eigen::Infinity>()) : 1.0;
+      VecX xn;
+      double en = e;
+      bool ok = false;
+      for (int k = 0; k < 40; ++k, step *= 0.5) {
+        xn = x + step * d;
+        en = energy(xn, eps, nullptr);
+        if (std::isfinite(en) && en <= e + 1e-4 * step * slope) {
+          ok = true;
+          break;
+        }
+      }
+      if (!ok) return false;
+      energy(xn, eps, &gn);
+      VecX s = xn - x, y = gn - g;
+      x = xn;
+      g = gn;
+      const bool converged = e - en <= 1e-12 * std::max(1.0, std::abs(e));
+      e = en;
+      if (s.dot(y) > 1e-16 * s.norm() * y.norm()) {
+        S.push_back(std::move(s));
+        Y.push_back(std::move(y));
+        if (int(S.size()) > kMemory) S.pop_front(), Y.pop_front();
+      }
+      if (converged) break;
+      if (stop_when_untangled && it % 5 == 4 && untangled_at(x)) return true;
+    }
+    return false;
+  }
+
+  RowMatrixX3d& V_;
+  const RowMatrixX8i& H_;
+  const std::vector<char>& on_surface_;
+  const std::vector<char>& fixed_;
+  const TriangleTree& tree_;
+  const std::vector<Vec3>& normals_;
+  const GlobalUntangleParams& p_;
+  GlobalUntangleStats& st_;
+
+  std::vector<int> dof_;       ///< #V first unknown of a free vertex, -1 otherwise
+  Eigen::Index ndof_ = 0;
+  std::vector<int> free_;      ///< free vertices
+  std::vector<int> active_;    ///< hexes with a free vertex
+  std::vector<int> active_index_;
+  std::vector<double> scale_;  ///< per active hex: initial mean edge length
+  std::vector<int> start_;     ///< per free vertex: its range in corners_
+  std::vector<std::pair<int, int>> corners_;  ///< (active hex, corner) of each free vertex
+  std::vector<Vec3> base_;
+  std::vector<Eigen::Matrix<double, 3, 2>> frame_;
+  std::vector<double> hex_energy_;
+  std::vector<Mat83> hex_grad_;
+};
+
+}  // namespace
+
+double hex_untangle_energy(const std::array<Eigen::Vector3d, 8>& p, double scale, double eps,
+                           Eigen::Matrix<double, 8, 3>* grad) {
+  Mat83 P;
+  for (int k = 0; k < 8; ++k) P.row(k) = p[size_t(k)].transpose() / scale;
+  const double e = hex_energy(P, eps, grad);
+  if (grad) *grad /= scale;
+  return e;
+}
+
+long untangle_global(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,
+                     const std::vector<char>& fixed, const TriangleTree& tree, const std::vector<Eigen::Vector3d>& normals,
+                     const GlobalUntangleParams& p, GlobalUntangleStats* stats) {
+  GlobalUntangleStats st;
+  GlobalUntangler u(V, H, on_surface, fixed, tree, normals, p, st);
+  const long left = u.run();
+  if (stats) *stats = st;
+  return left;
+}
+
+}  // namespace polyhex

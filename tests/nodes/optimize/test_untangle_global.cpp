@@ -1,0 +1,99 @@
+// Global untangling (§6 optimization): the energy, its gradient, and untangling a folded grid.
+#include <catch2/catch.hpp>
+
+#include "nodes/optimize/untangle_global.h"
+#include "nodes/quality/quality.h"
+#include "tests/nodes/hex_extract/hex_test_util.h"
+
+using namespace polyhex;
+
+namespace {
+
+std::array<Eigen::Vector3d, 8> hex_corners(const HexMesh& m, Eigen::Index h) {
+  std::array<Eigen::Vector3d, 8> p;
+  for (int k = 0; k < 8; ++k) p[size_t(k)] = m.V.row(m.H(h, k)).transpose();
+  return p;
+}
+
+}  // namespace
+
+TEST_CASE("untangle energy: 9 for a cube at any scale, gradient zero there and equal to finite differences",
+          "[quality-opt]") {
+  HexMesh g = test::grid_hex_mesh(1, 1, 1, 2.0);
+  auto p = hex_corners(g, 0);
+  Eigen::Matrix<double, 8, 3> G;
+  CHECK(hex_untangle_energy(p, 2.0, 1e-12, &G) == Approx(9.0).epsilon(1e-9));
+  CHECK(G.norm() < 1e-9);
+  CHECK(hex_untangle_energy(p, 0.5, 1e-12) == Approx(9.0).epsilon(1e-9));
+  // a folded hex: corner 6 pushed through the opposite corner; ε keeps the energy finite
+  p[6] = Eigen::Vector3d(-0.5, -0.3, -0.2);
+  const double eps = 0.3;
+  const double e = hex_untangle_energy(p, 2.0, eps, &G);
+  REQUIRE(std::isfinite(e));
+  CHECK(e > 9.0);
+  for (int k = 0; k < 8; ++k)
+    for (int a = 0; a < 3; ++a) {
+      auto q = p;
+      const double d = 1e-6;
+      q[size_t(k)][a] += d;
+      const double ep = hex_untangle_energy(q, 2.0, eps);
+      q[size_t(k)][a] -= 2 * d;
+      const double em = hex_untangle_energy(q, 2.0, eps);
+      CHECK(G(k, a) == Approx((ep - em) / (2 * d)).margin(1e-5 * std::max(1.0, std::abs(G(k, a)))));
+    }
+}
+
+TEST_CASE("untangle_global unfolds a grid with an interior vertex pushed through its neighbours", "[quality-opt]") {
+  const int n = 4;
+  HexMesh g = test::grid_hex_mesh(n, n, n);
+  SurfaceMesh s = test::voxel_surface(test::voxel_box(n, n, n));
+  TriangleTree tree(s.V, s.F);
+  std::vector<Eigen::Vector3d> normals(size_t(s.F.rows()));
+  for (Eigen::Index f = 0; f < s.F.rows(); ++f)
+    normals[size_t(f)] = (s.V.row(s.F(f, 1)) - s.V.row(s.F(f, 0)))
+                             .cross(s.V.row(s.F(f, 2)) - s.V.row(s.F(f, 0)))
+                             .normalized()
+                             .transpose();
+  // the vertex at (2, 2, 2) moved 1.6 edges along x: its hexes on the +x side fold
+  Eigen::Index centre = -1;
+  for (Eigen::Index v = 0; v < g.V.rows(); ++v)
+    if ((g.V.row(v) - Eigen::RowVector3d(2, 2, 2)).norm() < 1e-12) centre = v;
+  REQUIRE(centre >= 0);
+  g.V(centre, 0) += 1.6;
+  REQUIRE(hex_quality(g, nullptr).inverted >= 4);
+  const auto Q = hex_boundary_quads(g);
+  std::vector<char> on_surface(size_t(g.V.rows()), 0), fixed(size_t(g.V.rows()), 0);
+  for (Eigen::Index q = 0; q < Q.rows(); ++q)
+    for (int k = 0; k < 4; ++k) on_surface[size_t(Q(q, k))] = 1;
+  GlobalUntangleStats st;
+  const long left = untangle_global(g.V, g.H, on_surface, fixed, tree, normals, {}, &st);
+  CHECK(left == 0);
+  CHECK(st.inverted_before >= 4);
+  CHECK(st.inverted_after == 0);
+  CHECK(hex_quality(g, nullptr).inverted == 0);
+  CHECK(st.free_vertices > 8);
+  // boundary vertices stayed on the box surface
+  for (Eigen::Index v = 0; v < g.V.rows(); ++v)
+    if (on_surface[size_t(v)]) CHECK(tree.distance(g.V.row(v).transpose()) < 1e-9);
+}
+
+TEST_CASE("untangle_global leaves an untangled mesh and fixed vertices alone", "[quality-opt]") {
+  HexMesh g = test::grid_hex_mesh(2, 2, 2);
+  SurfaceMesh s = test::voxel_surface(test::voxel_box(2, 2, 2));
+  TriangleTree tree(s.V, s.F);
+  std::vector<Eigen::Vector3d> normals(size_t(s.F.rows()), Eigen::Vector3d::UnitZ());
+  const RowMatrixX3d before = g.V;
+  std::vector<char> on_surface(size_t(g.V.rows()), 0), fixed(size_t(g.V.rows()), 0);
+  GlobalUntangleStats st;
+  CHECK(untangle_global(g.V, g.H, on_surface, fixed, tree, normals, {}, &st) == 0);
+  CHECK(st.outer == 0);
+  CHECK(g.V == before);
+  // every vertex fixed: nothing can move, the fold stays
+  g.V(13, 0) += 1.6;  // the centre vertex of the 3x3x3 vertex grid
+  REQUIRE(hex_quality(g, nullptr).inverted > 0);
+  fixed.assign(size_t(g.V.rows()), 1);
+  const RowMatrixX3d folded = g.V;
+  CHECK(untangle_global(g.V, g.H, on_surface, fixed, tree, normals, {}, &st) > 0);
+  CHECK(st.free_vertices == 0);
+  CHECK(g.V == folded);
+}
