@@ -10,6 +10,7 @@
 #include <mutex>
 #include <sstream>
 
+#include "graph/cache.h"
 #include "runtime/atomic_file.h"
 
 namespace polyhex {
@@ -28,7 +29,43 @@ std::string port_list(const NodeSpec& spec) {
   return names.empty() ? "(none)" : join(names);
 }
 
+// A node whose params ask it to write files into the output folder (`save_*` flags) must run to
+// write them; so must every node under --save-all.
+bool writes_side_files(const ResolvedNode& n, bool save_all) {
+  if (save_all) return true;
+  for (auto it = n.params.begin(); it != n.params.end(); ++it)
+    if (it.key().rfind("save_", 0) == 0 && it.value().is_boolean() && it.value().get<bool>()) return true;
+  return false;
+}
+
 }  // namespace
+
+std::vector<std::string> Pipeline::cache_keys() const {
+  std::vector<std::string> keys(nodes_.size());
+  std::vector<int> state(nodes_.size(), 0);  // 0 = todo, 1 = done (the graph is acyclic)
+  std::function<void(size_t)> visit = [&](size_t i) {
+    if (state[i]) return;
+    state[i] = 1;
+    const ResolvedNode& n = nodes_[i];
+    std::vector<std::string> in;
+    bool uncacheable_input = false;
+    for (int u : n.input_nodes) {
+      if (u >= 0) {
+        visit(size_t(u));
+        uncacheable_input = uncacheable_input || keys[u].empty();
+      }
+      in.push_back(u >= 0 ? keys[u] : std::string());
+    }
+    if (uncacheable_input) return;
+    try {
+      keys[i] = node_key(*n.spec, n.params, in);
+    } catch (const std::exception&) {
+      // an unreadable input file: the node runs (and reports the error itself), nothing below is cached
+    }
+  };
+  for (size_t i = 0; i < nodes_.size(); ++i) visit(i);
+  return keys;
+}
 
 Pipeline Pipeline::build(const PipelineConfig& cfg) {
   Pipeline p;
@@ -135,6 +172,12 @@ RunResult Pipeline::run(const RunOptions& opt) const {
 
   RunResult result;
   result.nodes.resize(nodes_.size());
+  std::unique_ptr<ArtefactCache> cache;
+  std::vector<std::string> keys(nodes_.size());
+  if (!opt.cache_dir.empty()) {
+    cache = std::make_unique<ArtefactCache>(opt.cache_dir);
+    keys = cache_keys();
+  }
   std::vector<Artefact> outputs(nodes_.size());
   std::mutex event_mutex;
   auto event = [&](const std::string& e, const ResolvedNode& n, double v, const std::string& what) {
@@ -154,8 +197,27 @@ RunResult Pipeline::run(const RunOptions& opt) const {
     ctx.on_progress = [&](double f, const std::string& what) { event("progress", n, f, what); };
     Inputs in;
     for (int u : n.input_nodes) in.items.push_back(u >= 0 ? outputs[u] : Artefact{});
-    event("start", n, 0, "");
     auto t0 = std::chrono::steady_clock::now();
+    // The cache: sinks always run; outputs without a codec are not cached.
+    const bool cacheable = cache && !keys[i].empty() && !n.spec->output.empty() &&
+                           Registry::instance().codec(n.spec->output) != nullptr;
+    std::vector<std::string> cache_warnings;
+    if (cacheable && !writes_side_files(n, opt.save_all)) {
+      CacheLookup hit = cache->load(n.spec->type, keys[i], n.spec->output);
+      if (hit.status == CacheLookup::Status::hit) {
+        outputs[i] = std::move(hit.artefact);
+        rec.cache_hit = true;
+        rec.ran = true;
+        rec.metrics = std::move(hit.metrics);
+        rec.warnings = std::move(hit.warnings);
+        rec.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        event("cached", n, rec.seconds, "");
+        return;
+      }
+      if (hit.status == CacheLookup::Status::invalid)
+        cache_warnings.push_back("cache: ignored entry " + hit.problem + "; recomputed");
+    }
+    event("start", n, 0, "");
     try {
       Artefact out = n.spec->run(n.params, in, ctx);
       if (!n.spec->output.empty() && (!out || out.type != n.spec->output))
@@ -176,9 +238,17 @@ RunResult Pipeline::run(const RunOptions& opt) const {
       throw NodeError(n.id, n.spec->type, "unknown exception");
     }
     rec.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (cacheable) {
+      try {
+        cache->store(n.spec->type, keys[i], outputs[i], ctx.metrics, ctx.warnings);
+      } catch (const std::exception& e) {
+        cache_warnings.push_back(std::string("cache: could not store the result: ") + e.what());
+      }
+    }
     rec.ran = true;
     rec.metrics = std::move(ctx.metrics);
     rec.warnings = std::move(ctx.warnings);
+    rec.warnings.insert(rec.warnings.end(), cache_warnings.begin(), cache_warnings.end());
     event("done", n, rec.seconds, "");
   };
 

@@ -5,7 +5,8 @@
 /// Building checks everything before anything runs: unknown node types (listing the registered ones),
 /// params (unknown keys, types, ranges), inputs (unknown ports, unknown ids, missing required ports),
 /// artefact types of every edge, and cycles. Running builds one `continue_node` per node, wired along the
-/// inputs, so independent nodes run concurrently. An exception in a node cancels the graph and comes
+/// inputs, so independent nodes run concurrently; with a cache folder, nodes whose key is cached are
+/// loaded instead of run (graph/cache.h). An exception in a node cancels the graph and comes
 /// back as a NodeError naming the node id and type.
 #pragma once
 
@@ -30,8 +31,8 @@ struct ResolvedNode {
 struct NodeRecord {
   std::string id, type;
   double seconds = 0;
-  bool cache_hit = false;
-  bool ran = false;
+  bool cache_hit = false;        ///< the output, metrics and warnings were loaded from the artefact cache
+  bool ran = false;              ///< the node completed (computed, or loaded from the cache)
   json metrics = json::object();
   std::vector<std::string> warnings;
 };
@@ -40,9 +41,13 @@ struct RunOptions {
   std::filesystem::path out_dir = "polyhex-out";
   bool save_all = false;   ///< also write every mesh artefact as OUT/<id>.<ext>
   int threads = 0;         ///< 0 = all cores
-  /// Artefact cache folder; empty = no cache (every node runs).
+  /// Artefact cache folder (graph/cache.h); empty = no cache (every node runs). A node whose key is in
+  /// the cache is skipped: its output, metrics and warnings are loaded. Sinks always run, and so does
+  /// every node under save_all or with a true `save_*` param (they write files). A bad entry is ignored
+  /// with a warning on the node, recomputed and overwritten; a failed store is a warning too.
   std::filesystem::path cache_dir;
-  /// Called on node start ("start"), end ("done") and progress ("progress"); may be empty.
+  /// Called on node start ("start"), end ("done"), cache hit ("cached", value = seconds to load; no
+  /// "start"/"done" then) and progress ("progress"); may be empty.
   std::function<void(const std::string& event, const std::string& id, const std::string& type, double value,
                      const std::string& what)>
       on_event;
@@ -64,6 +69,9 @@ class Pipeline {
   const std::vector<ResolvedNode>& nodes() const { return nodes_; }
   /// Graphviz DOT of the pipeline: nodes with their type and params, edges labelled with artefact types.
   std::string dot() const;
+  /// Cache key of every node (graph/cache.h, node_key), in config order; "" for a node that cannot be
+  /// cached because a file it reads cannot be read or an input cannot be cached.
+  std::vector<std::string> cache_keys() const;
   /// Runs the graph. Never throws for node failures: they are in RunResult::error (and the report).
   /// \throw IOError when the output folder cannot be created
   RunResult run(const RunOptions& opt) const;

@@ -4,6 +4,8 @@
 
 #include <cstdio>
 
+#include "graph/cache.h"
+
 namespace polyhex {
 
 Pipeline load_pipeline(const RunRequest& req) {
@@ -19,6 +21,7 @@ RunResult run_pipeline(const Pipeline& p, const RunRequest& req) {
   opt.out_dir = req.out_dir;
   opt.save_all = req.save_all;
   opt.threads = req.threads;
+  if (!req.no_cache) opt.cache_dir = req.cache_dir.empty() ? default_cache_dir(req.out_dir) : req.cache_dir;
   const bool show = req.verbosity > 0 || ::isatty(STDERR_FILENO);
   if (show) {
     opt.on_event = [&](const std::string& e, const std::string& id, const std::string& type, double v,
@@ -27,6 +30,8 @@ RunResult run_pipeline(const Pipeline& p, const RunRequest& req) {
         std::fprintf(stderr, "polyhex: %-16s %-34s started\n", id.c_str(), type.c_str());
       else if (e == "done")
         std::fprintf(stderr, "polyhex: %-16s %-34s done in %.2f s\n", id.c_str(), type.c_str(), v);
+      else if (e == "cached")
+        std::fprintf(stderr, "polyhex: %-16s %-34s loaded from cache in %.2f s\n", id.c_str(), type.c_str(), v);
       else if (e == "progress" && req.verbosity > 0)
         std::fprintf(stderr, "polyhex: %-16s %3.0f%% %s\n", id.c_str(), 100 * v, what.c_str());
     };

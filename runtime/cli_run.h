@@ -18,8 +18,8 @@ struct RunRequest {
   std::filesystem::path out_dir = "polyhex-out";
   int threads = 0;
   bool save_all = false;
-  std::filesystem::path cache_dir;   ///< artefact cache; empty = default (.polyhex-cache beside out_dir)
-  bool no_cache = false;             ///< --no-cache: run every node, read and write no cache
+  std::filesystem::path cache_dir;   ///< artefact cache; empty = default_cache_dir(out_dir) (.polyhex-cache beside it)
+  bool no_cache = false;             ///< --no-cache: run every node, read and write no cache (benchmarks)
   int verbosity = 0;                 ///< 0 = progress on a terminal only, 1 = -v, 2 = -vv
 };
 
@@ -27,7 +27,7 @@ struct RunRequest {
 Pipeline load_pipeline(const RunRequest& req);
 
 /// Runs the pipeline, prints progress to stderr when stderr is a terminal (or verbosity > 0),
-/// writes report.json into the output folder.
+/// writes report.json into the output folder. Uses the artefact cache unless req.no_cache.
 RunResult run_pipeline(const Pipeline& p, const RunRequest& req);
 
 }  // namespace polyhex

@@ -1,12 +1,14 @@
 // polyhex: command-line interface of the all-hex PolyCube mesher.
 //
-//   polyhex run CONFIG [--input FILE] [--out DIR] [--set id.param=value]... [--threads N] [--save-all] [-v]
+//   polyhex run CONFIG [--input FILE] [--out DIR] [--set id.param=value]... [--threads N] [--save-all]
+//               [--cache DIR | --no-cache] [-v]
 //   polyhex bench CONFIG [--input FILE] [--repeat N] [--json FILE] [--set ...] [--threads N]
 //   polyhex graph CONFIG [--input FILE]          (Graphviz DOT on stdout)
 //   polyhex nodes [--json]                        (registered node types and their params)
 //
 //   polyhex check MESH [--surface SURF] [--json]   (the quality node alone; exit 3 if a hex is inverted)
 //   polyhex shapes NAME --out FILE                 (a built-in closed surface)
+//   polyhex cache stats|clear|prune [--cache DIR]  (the artefact cache, tools/cache_command.cpp)
 //
 // Exit codes: 0 success, 1 a node failed (report.json says which), 2 bad command line or config,
 // 3 the result has inverted hexes, 130 interrupted (SIGINT/SIGTERM).
@@ -100,6 +102,9 @@ const bool registered = register_commands([](CLI::App& app, std::vector<Command>
   add_run_options(run, *run_req);
   run->add_option("--out,-o", run_req->out_dir, "output folder (default polyhex-out)");
   run->add_flag("--save-all", run_req->save_all, "also write every mesh artefact as OUT/<node id>.<ext>");
+  auto* cache_opt =
+      run->add_option("--cache", run_req->cache_dir, "artefact cache folder (default: .polyhex-cache beside the output folder)");
+  run->add_flag("--no-cache", run_req->no_cache, "run every node; read and write no cache")->excludes(cache_opt);
   out.push_back({run, [run_req] {
                    run_req->verbosity = command_env().verbosity;
                    return cmd_run(*run_req);
