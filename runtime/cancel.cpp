@@ -1,9 +1,17 @@
 #include "runtime/cancel.h"
 
-#include <csignal>
+#include <pthread.h>
+#include <signal.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
+#include <cstdlib>
+#include <dirent.h>
+#include <mutex>
+#include <string>
+#include <thread>
 
 #include "runtime/errors.h"
 
@@ -13,8 +21,16 @@ namespace {
 
 std::atomic<int> g_signal{0};
 
-extern "C" void on_signal(int sig) {
-  // Async-signal-safe only: an atomic store, write(2), _exit(2).
+// Why a watcher thread and not a plain handler: METIS (under CHOLMOD's ordering) replaces the SIGTERM
+// handler while it runs (GKlib's gk_sigtrap: SIGERR = SIGTERM) with one that longjmps to a buffer of
+// the thread running METIS. A SIGTERM in that window crashed polyhex (SIGSEGV in ____longjmp_chk
+// when another thread took it) or was swallowed (the run went on and exited 0). So SIGINT and SIGTERM
+// are blocked in every thread and taken by sigwait() in one watcher thread: no handler ever runs,
+// whatever a library installs. The handler below stays installed for a thread that has not blocked
+// them yet.
+
+void record(int sig) {
+  // Async-signal-safe only (also used by the handler): an atomic exchange, write(2), _exit(2).
   if (g_signal.exchange(sig) != 0) {
     static const char msg[] = "\npolyhex: interrupted again, exiting now\n";
     ssize_t ignored = ::write(STDERR_FILENO, msg, sizeof(msg) - 1);
@@ -26,15 +42,79 @@ extern "C" void on_signal(int sig) {
   (void)ignored;
 }
 
+extern "C" void on_signal(int sig) { record(sig); }
+
+sigset_t interrupt_set() {
+  sigset_t s;
+  sigemptyset(&s);
+  sigaddset(&s, SIGINT);
+  sigaddset(&s, SIGTERM);
+  return s;
+}
+
+// Threads started before main() (OpenBLAS's server, log4cplus's pool under OpenVDB) do not inherit
+// the mask set in main(). Each is sent a real-time signal whose handler adds SIGINT and SIGTERM to the
+// mask the thread returns to (uc_sigmask, restored by sigreturn).
+std::atomic<int> g_blocked_threads{0};
+
+extern "C" void on_block_request(int, siginfo_t*, void* context) {
+  auto* uc = static_cast<ucontext_t*>(context);
+  sigaddset(&uc->uc_sigmask, SIGINT);
+  sigaddset(&uc->uc_sigmask, SIGTERM);
+  g_blocked_threads.fetch_add(1);
+}
+
+void block_in_other_threads() {
+  const int request = SIGRTMIN + 3;
+  struct sigaction sa {}, old {};
+  sa.sa_sigaction = on_block_request;
+  sa.sa_flags = SA_SIGINFO | SA_RESTART;
+  sigemptyset(&sa.sa_mask);
+  if (sigaction(request, &sa, &old) != 0) return;
+  const pid_t pid = ::getpid();
+  const pid_t self = static_cast<pid_t>(::syscall(SYS_gettid));
+  int sent = 0;
+  if (DIR* d = ::opendir("/proc/self/task")) {
+    while (dirent* e = ::readdir(d)) {
+      const long tid = std::strtol(e->d_name, nullptr, 10);
+      if (tid <= 0 || tid == self) continue;
+      if (::syscall(SYS_tgkill, pid, static_cast<pid_t>(tid), request) == 0) ++sent;
+    }
+    ::closedir(d);
+  }
+  // Wait (briefly) until every thread has run the handler; a thread that never does keeps the plain
+  // handler, as before.
+  const auto t0 = std::chrono::steady_clock::now();
+  while (g_blocked_threads.load() < sent && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(1))
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  sigaction(request, &old, nullptr);
+}
+
+void watch() {
+  const sigset_t set = interrupt_set();
+  for (;;) {
+    int sig = 0;
+    if (sigwait(&set, &sig) == 0) record(sig);
+  }
+}
+
 }  // namespace
 
 void install_interrupt_handlers() {
-  struct sigaction sa {};
-  sa.sa_handler = on_signal;
-  sigemptyset(&sa.sa_mask);
-  sa.sa_flags = 0;
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
+  static std::once_flag once;
+  std::call_once(once, [] {
+    struct sigaction sa {};
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sa.sa_flags = 0;
+    sigaction(SIGINT, &sa, nullptr);
+    sigaction(SIGTERM, &sa, nullptr);
+    // Block in this thread (threads it starts later inherit the mask) and in the threads that exist.
+    const sigset_t set = interrupt_set();
+    pthread_sigmask(SIG_BLOCK, &set, nullptr);
+    block_in_other_threads();
+    std::thread(watch).detach();
+  });
 }
 
 bool interrupted() { return g_signal.load(std::memory_order_relaxed) != 0; }

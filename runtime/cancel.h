@@ -7,7 +7,12 @@
 
 namespace polyhex {
 
-/// Installs the SIGINT and SIGTERM handlers (idempotent). Call once from main().
+/// Installs the SIGINT and SIGTERM handling (idempotent). Call once from main(), early. Both signals
+/// are blocked in every thread (the caller, threads it starts later, and the threads that already
+/// exist) and taken by a watcher thread with sigwait(): libraries that install their own handlers
+/// for a while (METIS traps SIGTERM during an ordering) can then neither crash nor swallow them.
+/// Processes started afterwards inherit the blocked mask: give them an empty one
+/// (posix_spawnattr_setsigmask) when they should see these signals.
 void install_interrupt_handlers();
 /// True after SIGINT/SIGTERM (or request_interrupt()).
 bool interrupted();

@@ -1,5 +1,6 @@
 #include "runtime/factorization.h"
 
+#include <dlfcn.h>
 #include <suitesparse/cholmod.h>
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -8,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <mutex>
 #include <vector>
 
 #include "runtime/errors.h"
@@ -21,10 +23,24 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
+/// Runs the BLAS under CHOLMOD on one thread. A multi-threaded OpenBLAS splits the supernodal
+/// kernels (dsyrk/dgemm/dtrsm) by its own thread count, so the factor's last bits could depend on the
+/// machine; and its threads would compete with TBB's workers (the parallelism of polyhex is TBB's:
+/// stages, columns). Looked up at run time: the BLAS behind libblas.so.3 need not be OpenBLAS (then
+/// nothing is done; reference BLAS is single-threaded anyway).
+void single_threaded_blas() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    using SetThreads = void (*)(int);
+    if (auto f = reinterpret_cast<SetThreads>(::dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) f(1);
+  });
+}
+
 /// A cholmod_common set up the same way everywhere: supernodal LL^T, no printing.
 struct Common {
   cholmod_common c;
   Common() {
+    single_threaded_blas();
     cholmod_start(&c);
     c.supernodal = CHOLMOD_SUPERNODAL;  // always supernodal: BLAS-3 kernels (OpenBLAS) for 3D meshes
     c.final_ll = 1;

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "nodes/quality/quality.h"
+#include "runtime/cancel.h"
 #include "runtime/errors.h"
 
 namespace polyhex {
@@ -72,10 +73,15 @@ class Extractor {
   }
 
   HexMesh run() {
+    // safe points between the phases (and inside the long ones): nothing is shared outside
+    throw_if_interrupted();
     place_corners();
     place_edges();
+    throw_if_interrupted();
     place_facets();
+    throw_if_interrupted();
     place_volume();
+    throw_if_interrupted();
     return form_hexes();
   }
 
@@ -164,7 +170,8 @@ class Extractor {
     // deepest positive candidates first, so they seed the clusters
     std::sort(first, last, [](const Candidate& a, const Candidate& b) {
       if (a.sign != b.sign) return a.sign > b.sign;
-      return a.depth > b.depth;
+      if (a.depth != b.depth) return a.depth > b.depth;
+      return a.simplex < b.simplex;  // a total order: equal depths resolve the same way every run
     });
     std::vector<char> taken(size_t(last - first), 0);
     for (auto seed = first; seed != last; ++seed) {
@@ -191,6 +198,7 @@ class Extractor {
     std::vector<std::vector<int>> tris(static_cast<size_t>(nc));
     for (Eigen::Index f = 0; f < seg_.F.rows(); ++f) tris[size_t(seg_.chart[f])].push_back(int(f));
     for (Eigen::Index c = 0; c < nc; ++c) {
+      throw_if_interrupted();
       const int label = seg_.charts[size_t(c)].label, a = label_axis(label), s = label_sign(label);
       const int u = (a + 1) % 3, w = (a + 2) % 3;
       const int plane = map_.chart_plane[c];
@@ -242,7 +250,11 @@ class Extractor {
   /// Groups candidates by lattice point and resolves each group.
   template <class Accept>
   void for_each_point(std::vector<Candidate>& cand, Accept accept) {
-    std::sort(cand.begin(), cand.end(), [](const Candidate& a, const Candidate& b) { return a.key < b.key; });
+    // (lattice point, simplex) is unique: the order, and so the resolution of each group, does not
+    // depend on the order the (parallel) rasterisation produced the candidates in.
+    std::sort(cand.begin(), cand.end(), [](const Candidate& a, const Candidate& b) {
+      return a.key != b.key ? a.key < b.key : a.simplex < b.simplex;
+    });
     for (size_t i = 0; i < cand.size();) {
       size_t j = i;
       while (j < cand.size() && cand[j].key == cand[i].key) ++j;
@@ -256,6 +268,7 @@ class Extractor {
     tbb::enumerable_thread_specific<std::vector<Candidate>> local;
     const Vec3 off = Vec3::Constant(shift) + delta_;
     tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, T_.rows(), 2048), [&](const auto& r) {
+      throw_if_interrupted();
       auto& out = local.local();
       for (Eigen::Index t = r.begin(); t < r.end(); ++t) {
         const Vec3 p[4] = {P(T_(t, 0)), P(T_(t, 1)), P(T_(t, 2)), P(T_(t, 3))};
@@ -373,6 +386,7 @@ class Extractor {
     std::vector<std::array<int, 8>> hex(centroids.size());
     std::vector<int> missing(centroids.size(), 0);
     tbb::parallel_for(size_t(0), centroids.size(), [&](size_t ci) {
+      if (ci % 1024 == 0) throw_if_interrupted();
       Scratch& s = scratch.local();
       if (s.tet_stamp.empty()) {
         s.tet_stamp.assign(size_t(T_.rows()), 0);

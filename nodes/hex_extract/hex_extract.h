@@ -61,7 +61,8 @@ struct HexExtractStats {
 /// \param map  PolyCube map: input tets, segmentation, U (#V by 3), edge_length h > 0, chart_plane (#charts)
 /// \return hex mesh in the input's space; V #V by 3, H #H by 8 VTK_HEXAHEDRON order
 /// \throw InvalidInput when the map is inconsistent (sizes, missing input or segmentation, h <= 0, a chart
-///        plane that does not match its vertices) or no hex could be formed
+///        plane that does not match its vertices) or no hex could be formed; Interrupted after
+///        SIGINT/SIGTERM (runtime/cancel.h), checked between the phases and inside the long loops
 HexMesh extract_hexes(const PolyCubeMap& map, const HexExtractParams& p = {}, HexExtractStats* stats = nullptr);
 
 }  // namespace polyhex

@@ -15,6 +15,7 @@
 #include <tuple>
 
 #include "nodes/io/surface_io.h"
+#include "runtime/cancel.h"
 #include "runtime/errors.h"
 
 namespace polyhex {
@@ -383,6 +384,7 @@ void split_multi_orientation(const Surface& s, const std::vector<Vec3>& normal, 
                              State& st) {
   std::set<std::vector<int>> tried;
   while (st.splits_multi < max_splits) {
+    throw_if_interrupted();
     Structure S = analyse(s, st.label);
     // mesh edges between opposite-direction charts, grouped into curves by shared vertices
     std::vector<int> parent(s.V->rows());
@@ -630,6 +632,7 @@ void split_wedges(const Surface& s, const std::vector<Vec3>& normal, const PolyC
   const double h = p.hex_edge_length * s.diag;
   std::set<int> failed_tips;
   while (st.splits_wedge < p.max_splits) {
+    throw_if_interrupted();
     Structure S = analyse(s, st.label);
     auto ext = find_extrema(s, S, st.label, p.edge_smoothing_iterations, p.extremum_depth * h);
     std::vector<Extremum> todo;
@@ -793,6 +796,7 @@ std::pair<int, int> structure_score(const Surface& s, const State& st) {
 void split_islands(const Surface& s, const std::vector<Vec3>& normal, double h, int max_splits, State& st) {
   std::set<std::pair<int, int>> failed;  // (a triangle of C, a triangle of R) cuts that did not help
   while (st.splits_island < max_splits) {
+    throw_if_interrupted();
     Structure S = analyse(s, st.label);
     std::vector<int> chart_label(S.n), rep(S.n);
     for (int t = 0; t < s.nf(); ++t) {
@@ -928,6 +932,7 @@ void repair_corners(const Surface& s, const std::vector<Vec3>& normal, double h,
   std::set<int> failed;
   std::vector<char> all(s.nf(), 1);
   while (st.repaired_corners < max_repairs) {
+    throw_if_interrupted();
     PolyCubeSegmentation r = make_result(s, st);
     if (r.valid) return;
     std::vector<int> bad;
@@ -983,6 +988,7 @@ void remove_small_charts(const Surface& s, const std::vector<Vec3>& normal, cons
                          State& st, bool straighten_first,
                          const std::function<bool(const Structure&, int chart, int edges)>& bad) {
   for (int round = 0; round < 16; ++round) {
+    throw_if_interrupted();
     if (straighten_first) straighten(s, st.label);
     Structure S = analyse(s, st.label);
     std::vector<int> edge_count(S.n, 0);
@@ -1046,6 +1052,7 @@ void repair(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSeg
 
 /// One full §5.1 run with a given number of normal-smoothing passes.
 PolyCubeSegmentation segment_once(const Surface& s, const PolyCubeSegmentParams& p, int smoothing) {
+  throw_if_interrupted();
   std::vector<Vec3> normal = smoothed_normals(s, smoothing);
   State st;
   st.label.resize(s.nf());

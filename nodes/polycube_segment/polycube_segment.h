@@ -60,6 +60,7 @@ RowMatrixX3i boundary_triangles(const TetMesh& mesh);
 /// \param deformed  the output of rotation_deform (same connectivity as the input tet mesh)
 /// \pre p.hex_edge_length > 0
 /// \throw InvalidInput when the boundary is empty or not a closed 2-manifold (names an edge)
+/// \throw Interrupted after SIGINT/SIGTERM (runtime/cancel.h), checked between the repair passes
 PolyCubeSegmentation segment_polycube(const TetMesh& deformed, const PolyCubeSegmentParams& p = {});
 
 /// Charts, edges, corners and validity of a given labelling, without clean-up or splits.

@@ -12,6 +12,7 @@
 #include <numeric>
 #include <queue>
 
+#include "runtime/cancel.h"
 #include "runtime/errors.h"
 #include "runtime/factorization.h"
 
@@ -214,6 +215,7 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
   }
 
   for (int a = 0; a < 3; ++a) {
+    throw_if_interrupted();  // safe point: one axis at a time
     // Same-axis charts sharing a vertex are forced onto one plane (groups).
     std::vector<int> axis_charts;
     for (int c = 0; c < nC; ++c)
@@ -333,6 +335,7 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
     for (int g = 0; g < nG; ++g) trip.emplace_back(nFree + g, nFree + g, eps * group_size[g]), rhs[nFree + g] += eps * group_size[g] * group_mean[g];
     Eigen::SparseMatrix<double> A(n, n);
     A.setFromTriplets(trip.begin(), trip.end());
+    throw_if_interrupted();
     CholmodFactorization chol(A);
     Eigen::VectorXd y = chol.solve(rhs);
     st.seconds_poisson += since(t0);
@@ -394,6 +397,7 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
     for (int ch : axis_charts) out.chart_plane[ch] = int(k[chart_group[ch]]);
 
     // Final solve with the chart planes pinned.
+    throw_if_interrupted();
     t0 = Clock::now();
     Eigen::VectorXd u(nV);
     for (int v = 0; v < nV; ++v)

@@ -62,7 +62,8 @@ struct PositionDeformStats {
 /// \param seg        PolyCube structure of the deformed boundary (§5.1); its triangles index input.V
 /// \pre deformed.V.rows() == input.V.rows(), seg.F indexes input.V, seg.chart in [0, #charts)
 /// \throw InvalidInput when sizes disagree or the structure has no chart on some axis;
-///        SolverError when a linear solve fails; ConfigError for an unknown final_solve
+///        SolverError when a linear solve fails; ConfigError for an unknown final_solve;
+///        Interrupted after SIGINT/SIGTERM (runtime/cancel.h), checked per axis and before each solve
 PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input, const TetMesh& deformed,
                             std::shared_ptr<const PolyCubeSegmentation> seg, const PositionDeformParams& p,
                             PositionDeformStats* stats = nullptr);

@@ -3,7 +3,7 @@
 #include <Eigen/Geometry>
 #include <Eigen/SparseCore>
 #include <tbb/blocked_range.h>
-#include <tbb/combinable.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -14,6 +14,7 @@
 #include <functional>
 #include <numeric>
 
+#include "runtime/cancel.h"
 #include "runtime/errors.h"
 
 namespace polyhex {
@@ -33,6 +34,21 @@ void parallel_range(int n, F&& body) {
   tbb::parallel_for(tbb::blocked_range<int>(0, n, 512), [&](const tbb::blocked_range<int>& r) {
     for (int i = r.begin(); i < r.end(); ++i) body(i);
   });
+}
+
+/// A parallel reduction whose result does not depend on the number of threads or their scheduling:
+/// the range is split into the same chunks and joined in the same order every time (floating-point
+/// sums are not associative, so tbb::combinable / parallel_reduce would give thread-dependent bits).
+/// `body(i, acc)` adds item i to acc; `join(a, b)` returns a followed by b.
+template <class T, class F, class J>
+T deterministic_reduce(int n, T identity, F&& body, J&& join) {
+  return tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<int>(0, n, 512), identity,
+      [&](const tbb::blocked_range<int>& r, T acc) {
+        for (int i = r.begin(); i < r.end(); ++i) body(i, acc);
+        return acc;
+      },
+      join);
 }
 
 /// Compressed rows: row r is items[offsets[r] .. offsets[r+1]).
@@ -258,9 +274,7 @@ struct Reduction {
 
 /// Inverted tets, conformal distortion (relative to the input, through Dinv0) and volume.
 Reduction tet_figures(const RowMatrixX3d& V, const RowMatrixX4i& T, const std::vector<Eigen::Matrix3d>& Dinv0) {
-  tbb::combinable<Reduction> acc;
-  parallel_range(static_cast<int>(T.rows()), [&](int t) {
-    auto& r = acc.local();
+  auto body = [&](int t, Reduction& r) {
     const Eigen::Matrix3d D = edge_matrix(V, T, t);
     const double det = D.determinant();
     r.volume += det / 6.0;
@@ -273,8 +287,8 @@ Reduction tet_figures(const RowMatrixX3d& V, const RowMatrixX4i& T, const std::v
     r.sum += kappa;
     r.max = std::max(r.max, kappa);
     ++r.good;
-  });
-  return acc.combine([](Reduction a, const Reduction& b) {
+  };
+  return deterministic_reduce(static_cast<int>(T.rows()), Reduction{}, body, [](Reduction a, const Reduction& b) {
     a.sum += b.sum;
     a.max = std::max(a.max, b.max);
     a.volume += b.volume;
@@ -364,15 +378,16 @@ RowMatrixX3i boundary_faces(const RowMatrixX4i& T, int nV) { return boundary_fac
 
 double axis_alignment(const RowMatrixX3d& V, const RowMatrixX3i& F, double angle_deg) {
   const double c = std::cos(angle_deg * kPi / 180.0);
-  tbb::combinable<std::pair<double, double>> acc;  // (aligned area, total area)
-  parallel_range(static_cast<int>(F.rows()), [&](int f) {
-    const Eigen::Vector3d n = face_area_vector(V, F, f);
-    const double a = n.norm();
-    auto& s = acc.local();
-    s.second += a;
-    if (a > 0 && n.cwiseAbs().maxCoeff() >= c * a) s.first += a;
-  });
-  auto s = acc.combine([](auto x, const auto& y) { return std::make_pair(x.first + y.first, x.second + y.second); });
+  using Areas = std::pair<double, double>;  // (aligned area, total area)
+  const Areas s = deterministic_reduce(
+      static_cast<int>(F.rows()), Areas{0.0, 0.0},
+      [&](int f, Areas& acc) {
+        const Eigen::Vector3d n = face_area_vector(V, F, f);
+        const double a = n.norm();
+        acc.second += a;
+        if (a > 0 && n.cwiseAbs().maxCoeff() >= c * a) acc.first += a;
+      },
+      [](const Areas& x, const Areas& y) { return Areas{x.first + y.first, x.second + y.second}; });
   return s.second > 0 ? s.first / s.second : 0.0;
 }
 
@@ -399,20 +414,23 @@ RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformP
   // §4.2 Eq. 1 times N_i: graph Laplacian with one Dirichlet vertex per component.
   const Eigen::SparseMatrix<double> P = laplacian_lower(top, std::vector<double>(n, 0.0), top.pinned);
   std::vector<Eigen::Matrix3d> Dinv0(nT);
-  tbb::combinable<double> vol_acc(0.0);
-  parallel_range(nT, [&](int t) {
-    const Eigen::Matrix3d D = edge_matrix(input.V, input.T, t);
-    vol_acc.local() += D.determinant() / 6.0;
-    Dinv0[t] = D.inverse();
-  });
-  const double volume0 = vol_acc.combine(std::plus<double>());
+  const double volume0 = deterministic_reduce(
+      nT, 0.0,
+      [&](int t, double& vol) {
+        const Eigen::Matrix3d D = edge_matrix(input.V, input.T, t);
+        vol += D.determinant() / 6.0;
+        Dinv0[t] = D.inverse();
+      },
+      std::plus<double>());
   res.assemble_seconds = seconds_since(t_assemble);
 
   // Q and P share their pattern (P keeps explicit zeros in the pinned rows): one analysis.
   CholmodFactorization quat_solver;
   quat_solver.analyse(Q);
   CholmodFactorization pos_solver = quat_solver.share_analysis();
+  throw_if_interrupted();
   quat_solver.factor(Q);
+  throw_if_interrupted();
   pos_solver.factor(P);
 
   res.boundary_vertices = nB;
@@ -433,6 +451,7 @@ RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformP
   const Eigen::Vector4d identity(0, 0, 0, 1);
 
   for (int it = 1; it <= params.iterations; ++it) {
+    throw_if_interrupted();  // safe point: nothing of this iteration computed yet
     auto t_it = Clock::now();
     RotationIterationStats st;
 
@@ -482,15 +501,16 @@ RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformP
     // 4. Laplace per quaternion component, soft anchors on every boundary vertex.
     for (int b = 0; b < nB; ++b) Bq.row(top.bverts[b]) = w2 * target[b].transpose();
     const Eigen::MatrixXd q = quat_solver.solve(Bq, mode);
+    throw_if_interrupted();
 
     // 5. Normalise; per-vertex rotation matrices.
-    tbb::combinable<double> min_norm([] { return std::numeric_limits<double>::infinity(); });
-    parallel_range(n, [&](int v) {
-      const double len = q.row(v).norm();
-      min_norm.local() = std::min(min_norm.local(), len);
-      rot[v] = Eigen::Quaterniond(q(v, 3), q(v, 0), q(v, 1), q(v, 2)).normalized().toRotationMatrix();
-    });
-    st.min_quaternion_norm = min_norm.combine([](double a, double b) { return std::min(a, b); });
+    st.min_quaternion_norm = deterministic_reduce(
+        n, std::numeric_limits<double>::infinity(),
+        [&](int v, double& min_norm) {
+          min_norm = std::min(min_norm, q.row(v).norm());
+          rot[v] = Eigen::Quaterniond(q(v, 3), q(v, 0), q(v, 1), q(v, 2)).normalized().toRotationMatrix();
+        },
+        [](double a, double b) { return std::min(a, b); });
     if (!(st.min_quaternion_norm > 1e-12))
       throw SolverError("rotation_deform: degenerate quaternion (norm " + std::to_string(st.min_quaternion_norm) +
                         ") in iteration " + std::to_string(it));

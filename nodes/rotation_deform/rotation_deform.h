@@ -114,7 +114,8 @@ using IterationCallback = std::function<void(int k, const TetMesh& deformed, con
 /// \pre tets.T indices in range, every vertex used by a tet, positive tets, finite positions
 /// \throw InvalidInput for an empty mesh, an index out of range, an unused vertex or a non-finite
 ///        position; ConfigError for params out of range or an unknown solve_mode;
-///        SolverError if a factorization fails
+///        SolverError if a factorization fails; Interrupted after SIGINT/SIGTERM (runtime/cancel.h),
+///        checked before each factorization and twice per iteration
 RotationDeformResult rotation_deform(const TetMesh& tets, const RotationDeformParams& params,
                                      const IterationCallback& on_iteration = {});
 

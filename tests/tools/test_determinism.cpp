@@ -1,0 +1,131 @@
+// Determinism: the same input and config give byte-identical meshes and identical figures for 1, 2
+// and 8 threads and across repeated runs (issue 8). Also: the BLAS under CHOLMOD runs on one thread.
+#include <catch2/catch.hpp>
+
+#include <dlfcn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "runtime/factorization.h"
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+struct Result {
+  int code;
+  std::string output;
+};
+
+Result shell(const std::string& cmd) {
+  Result r{-1, {}};
+  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
+  REQUIRE(p);
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
+  const int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// Wall-clock figures, which legitimately differ between runs.
+bool timing_key(const std::string& k) {
+  return k.find("seconds") != std::string::npos || k == "factor_solve_fraction";
+}
+
+/// Every difference between two reports' node metrics (timings left out), as "node.key: a != b".
+std::vector<std::string> metric_differences(const json& a, const json& b) {
+  std::vector<std::string> out;
+  for (auto it = a["nodes"].begin(); it != a["nodes"].end(); ++it) {
+    const json& ma = it.value()["metrics"];
+    const json& mb = b["nodes"][it.key()]["metrics"];
+    for (auto m = ma.begin(); m != ma.end(); ++m)
+      if (!timing_key(m.key()) && (!mb.contains(m.key()) || mb[m.key()] != m.value()))
+        out.push_back(it.key() + "." + m.key() + ": " + m.value().dump() + " != " +
+                      (mb.contains(m.key()) ? mb[m.key()].dump() : std::string("(missing)")));
+    if (mb.size() != ma.size()) out.push_back(it.key() + ": different metric keys");
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("determinism: default config, 1 / 2 / 8 threads and a repeated run give identical bytes and figures",
+          "[robust][cli]") {
+  const fs::path root = fs::temp_directory_path() / ("polyhex_robust_det_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root);
+  const std::string bin = POLYHEX_BINARY;
+  // a coarse built-in shape with curved and sharp features, so every stage has work to do
+  Result s = shell(bin + " shapes fandisk_like --resolution 16 --out " + (root / "fandisk.obj").string());
+  INFO(s.output);
+  REQUIRE(s.code == 0);
+
+  struct Run {
+    int threads;
+    std::string mesh;
+    json report;
+  };
+  std::vector<Run> runs;
+  for (int threads : {1, 2, 8, 8}) {
+    // each run in its own folder, with the same relative output path: the reports name the same file,
+    // and no run can find another's artefact cache
+    const fs::path dir = root / ("run" + std::to_string(runs.size()));
+    fs::create_directories(dir);
+    Result r = shell("cd " + dir.string() + " && " + bin + " run " + POLYHEX_SOURCE_DIR + "/configs/default.json" +
+                     " --input ../fandisk.obj --out out --threads " + std::to_string(threads) +
+                     " --set tets.edge_length=0.06 --set segment.hex_edge_length=0.06 --set polycube.edge_length=0.06");
+    INFO("threads " << threads << ": " << r.output);
+    REQUIRE(r.code == 0);
+    runs.push_back({threads, slurp(dir / "out" / "hex.vtk"), json::parse(slurp(dir / "out" / "report.json"))});
+  }
+  const Run& ref = runs.front();
+  REQUIRE(ref.mesh.size() > 10000);
+  const json& q = ref.report["nodes"]["quality"]["metrics"];
+  REQUIRE(q["hexes"].get<long>() > 300);
+  CHECK(q["inverted"] == 0);
+  CHECK(ref.report["nodes"]["optimize"]["metrics"]["time_budget_hit"] == false);
+  for (size_t i = 1; i < runs.size(); ++i) {
+    INFO("run " << i << " with " << runs[i].threads << " threads against 1 thread");
+    CHECK(runs[i].mesh == ref.mesh);
+    CHECK(metric_differences(ref.report, runs[i].report) == std::vector<std::string>{});
+    for (auto& n : runs[i].report["nodes"]) CHECK(n.value("cache_hit", false) == false);
+  }
+  fs::remove_all(root);
+}
+
+TEST_CASE("determinism: OpenBLAS under CHOLMOD runs on one thread once a factorization exists", "[robust]") {
+  Eigen::SparseMatrix<double> A(3, 3);
+  A.insert(0, 0) = 4;
+  A.insert(1, 1) = 5;
+  A.insert(2, 2) = 6;
+  A.insert(1, 0) = 1;
+  polyhex::CholmodFactorization f(A);
+  REQUIRE(f.factored());
+  using GetThreads = int (*)();
+  auto get = reinterpret_cast<GetThreads>(::dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+  if (!get) {
+    WARN("the BLAS is not OpenBLAS: nothing to check");
+    SUCCEED();
+    return;
+  }
+  CHECK(get() == 1);
+}
