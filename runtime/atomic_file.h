@@ -9,10 +9,15 @@
 
 namespace polyhex {
 
-/// Calls `fill` with a stream on `path.tmp.<pid>.<n>`, flushes, checks the stream and renames.
+/// Calls `fill` with a stream on `path.tmp.<pid>.<n>`, flushes, closes, checks the stream and renames.
+/// Whatever fails (a full disk, a file size limit, an unwritable or missing folder, `fill` throwing),
+/// no file is left under `path` (an existing file there is kept unchanged) and the temporary file is
+/// removed.
 /// \param binary open the stream in binary mode
-/// \throw IOError naming `path` when the file cannot be opened, written or renamed; the temporary
-///        file is removed. Exceptions thrown by `fill` are rethrown after the clean-up.
+/// \throw IOError naming `path` and the system's reason ("No space left on device", "File too
+///        large", "Permission denied") when the file cannot be opened, written, closed or renamed,
+///        when `path` is an existing folder or its parent is a file. Exceptions thrown by `fill` are
+///        rethrown after the clean-up.
 void write_file_atomic(const std::filesystem::path& path, const std::function<void(std::ostream&)>& fill,
                        bool binary = false);
 

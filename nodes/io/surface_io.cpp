@@ -78,6 +78,9 @@ RawSurface parse_obj(std::string_view text, const std::string& file) {
     }
     // vn, vt, g, o, s, usemtl, mtllib, l, ...: not needed
   }
+  if (s.F.empty())
+    throw IOError(file + ": no faces (`f` lines)" +
+                  (s.V.empty() ? std::string(" and no vertices (`v` lines): not an OBJ file?") : std::string()));
   const size_t nv = s.V.size() / 3;
   for (size_t f = 0; f < s.F.size(); ++f)
     if (size_t(s.F[f]) >= nv)
@@ -686,6 +689,10 @@ class SurfaceChecker {
       r_.warnings.push_back(name_ + ": oriented consistently: flipped " + std::to_string(flipped) + " of " +
                             std::to_string(nf) + " triangles");
     r_.components = ncomp;
+    if (ncomp > 1)
+      r_.warnings.push_back(name_ + ": " + std::to_string(ncomp) +
+                            " connected components: all are meshed, with edge lengths relative to the whole "
+                            "model's bounding box");
 
     // Signed volume (divergence theorem), about the centroid for accuracy.
     const Eigen::RowVector3d c = m_.V.colwise().mean();
@@ -744,6 +751,7 @@ SurfaceMesh read_surface(const std::filesystem::path& path, SurfaceReadReport* r
   if (ext != ".obj" && ext != ".off" && ext != ".stl" && ext != ".ply")
     throw IOError(file + ": unknown surface extension `" + ext + "` (expected .obj, .off, .stl or .ply)");
   const std::string data = io_detail::load_file(path);
+  if (data.find_first_not_of(" \t\r\n") == std::string::npos) throw IOError(file + ": empty file");
   RawSurface raw = ext == ".obj"   ? parse_obj(data, file)
                    : ext == ".off" ? parse_off(data, file)
                    : ext == ".stl" ? parse_stl(data, file)

@@ -1,8 +1,10 @@
 #include "nodes/io/tetmesh_io.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
+#include "nodes/io/surface_io.h"
 #include "nodes/io/text_cursor.h"
 #include "runtime/errors.h"
 
@@ -87,6 +89,68 @@ CellsRead read_tetgen(const std::filesystem::path& given) {
   return r;
 }
 
+/// Faces shared by more than 2 tets or by two tets on the same side (overlapping tets) are errors;
+/// the faces used once (the boundary) must form a closed manifold surface (no edge or vertex where
+/// two parts of the solid only touch). \return the number of boundary faces
+/// \pre every tet positively oriented
+long check_tet_faces(const TetMesh& mesh, const std::string& name) {
+  // Outward faces of a positive tet (v0 v1 v2 v3).
+  static const int kFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  struct Face {
+    std::array<int, 3> key;  // sorted vertices
+    int tet;
+    bool even;               // the outward orientation is an even permutation of key
+  };
+  const Eigen::Index nt = mesh.T.rows();
+  std::vector<Face> faces;
+  faces.reserve(size_t(4 * nt));
+  for (Eigen::Index t = 0; t < nt; ++t)
+    for (const auto& f : kFaces) {
+      std::array<int, 3> v{mesh.T(t, f[0]), mesh.T(t, f[1]), mesh.T(t, f[2])};
+      // Rotate the smallest first; then the orientation is even iff the rest is increasing.
+      while (v[0] > v[1] || v[0] > v[2]) v = {v[1], v[2], v[0]};
+      const bool even = v[1] < v[2];
+      if (!even) std::swap(v[1], v[2]);
+      faces.push_back({v, int(t), even});
+    }
+  std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) {
+    return a.key != b.key ? a.key < b.key : a.tet < b.tet;
+  });
+  auto face_str = [&](const std::array<int, 3>& k) {
+    return "(" + std::to_string(k[0]) + ", " + std::to_string(k[1]) + ", " + std::to_string(k[2]) + ")";
+  };
+  SurfaceMesh boundary;
+  std::vector<int> bf;
+  for (size_t i = 0; i < faces.size();) {
+    size_t j = i;
+    while (j < faces.size() && faces[j].key == faces[i].key) ++j;
+    if (j - i > 2)
+      throw InvalidInput(name + ": face " + face_str(faces[i].key) + " is shared by " + std::to_string(j - i) +
+                         " tets (" + std::to_string(faces[i].tet) + ", " + std::to_string(faces[i + 1].tet) + ", " +
+                         std::to_string(faces[i + 2].tet) + ", ...): the tets overlap");
+    if (j - i == 2 && faces[i].even == faces[i + 1].even)
+      throw InvalidInput(name + ": tets " + std::to_string(faces[i].tet) + " and " + std::to_string(faces[i + 1].tet) +
+                         " lie on the same side of their shared face " + face_str(faces[i].key) +
+                         ": the tets overlap (a folded or inverted region)");
+    if (j - i == 1) {
+      const auto& k = faces[i].key;
+      if (faces[i].even) bf.insert(bf.end(), {k[0], k[1], k[2]});
+      else bf.insert(bf.end(), {k[0], k[2], k[1]});
+    }
+    i = j;
+  }
+  boundary.V = mesh.V;
+  boundary.F.resize(Eigen::Index(bf.size() / 3), 3);
+  std::copy(bf.begin(), bf.end(), boundary.F.data());
+  SurfaceReadReport ignored;
+  try {
+    check_and_repair_surface(boundary, name + ": boundary", ignored);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(std::string(e.what()) + " (the boundary faces of the tets must form a closed manifold surface)");
+  }
+  return long(boundary.F.rows());
+}
+
 }  // namespace
 
 void check_and_orient_tets(TetMesh& mesh, const std::string& name, TetReadReport& report) {
@@ -116,6 +180,7 @@ void check_and_orient_tets(TetMesh& mesh, const std::string& name, TetReadReport
   if (reoriented > 0)
     report.warnings.push_back(name + ": re-oriented " + std::to_string(reoriented) + " inverted tets");
   report.reoriented = reoriented;
+  report.boundary_faces = check_tet_faces(mesh, name);
 
   std::vector<int> map(size_t(mesh.V.rows()), -1);
   for (Eigen::Index i = 0; i < mesh.T.size(); ++i) map[size_t(mesh.T.data()[i])] = 0;

@@ -20,6 +20,7 @@ struct TetReadReport {
   int vertices = 0;    ///< vertices after dropping unused ones
   int tets = 0;        ///< tetrahedra read
   int reoriented = 0;  ///< inverted tets whose vertices 2 and 3 were swapped
+  long boundary_faces = 0;  ///< faces used by one tet
   std::vector<std::string> warnings;  ///< repairs, ignored cell types and sections
 };
 
@@ -29,7 +30,10 @@ struct TetReadReport {
 /// \throw IOError naming the file (and line) for a missing file, an unknown extension, malformed or
 ///        truncated content, wrong counts, a non-finite coordinate, an index out of range, no tets
 /// \throw InvalidInput naming the file and the tet index for a degenerate tet (repeated vertex, or
-///        |volume| <= 1e-14 bbox_diag^3)
+///        |volume| <= 1e-14 bbox_diag^3); naming the tets and the face for a face shared by more than 2
+///        tets or by 2 tets on the same side of it (overlapping tets, which re-orienting cannot fix);
+///        naming the place for a boundary that is not a closed manifold surface (two parts of the
+///        solid touching at an edge or a vertex only)
 TetMesh read_tetmesh(const std::filesystem::path& path, TetReadReport* report = nullptr);
 
 /// The checks and repairs of read_tetmesh on a mesh in memory (name used in messages).

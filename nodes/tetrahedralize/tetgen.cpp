@@ -10,7 +10,9 @@
 #include <cmath>
 #include <ctime>
 #include <mutex>
+#include <cstring>
 #include <sstream>
+#include <unistd.h>
 #include <unordered_map>
 #include <vector>
 
@@ -22,6 +24,8 @@ namespace {
 using Vec3 = Eigen::Vector3d;
 
 constexpr double kVolumeFactor = 1.5;
+constexpr double kTetsPerRegularVolume = 1.5;  // tets per volume of a regular tet of edge h (measured)
+constexpr double kGrid = 68719476736.0;  // 2^36: normalized coordinates are rounded to multiples of 1 / kGrid
 
 std::string name_of(const SurfaceMesh& s) { return s.source.empty() ? std::string("surface") : s.source; }
 
@@ -33,6 +37,73 @@ void validate(const SurfaceMesh& s) {
   if (!s.V.allFinite()) throw InvalidInput(who + ": vertex coordinates are not all finite");
   if (s.F.minCoeff() < 0 || s.F.maxCoeff() >= s.V.rows())
     throw InvalidInput(who + ": triangle vertex index out of range (" + std::to_string(s.V.rows()) + " vertices)");
+  const double diag = (s.V.colwise().maxCoeff() - s.V.colwise().minCoeff()).norm();
+  if (!std::isfinite(diag))
+    throw InvalidInput(who + ": coordinates too large: the bounding-box diagonal overflows a double");
+  if (!(diag > 0)) throw InvalidInput(who + ": all vertices are at one point (bounding-box diagonal 0)");
+}
+
+std::string short_number(double x) {
+  std::ostringstream o;
+  o.precision(3);
+  o << x;
+  return o.str();
+}
+
+/// Physical memory of the machine in bytes (0 when unknown).
+double physical_memory() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && page > 0 ? double(pages) * double(page) : 0.0;
+}
+
+/// Refuses a request whose estimated size exceeds max_tets or the machine's memory.
+void check_size(const TetEstimate& e, const TetgenParams& p, const std::string& who) {
+  const double memory = physical_memory();
+  const bool too_many = e.tets > double(p.max_tets);
+  const bool too_big = memory > 0 && e.bytes > memory;
+  if (!too_many && !too_big) return;
+  // The count scales as 1 / edge_length^3: the smallest edge_length within both limits.
+  double limit = double(p.max_tets);
+  if (memory > 0) limit = std::min(limit, memory / kTetgenBytesPerTet);
+  const double min_edge = p.edge_length * std::cbrt(e.tets / limit);
+  std::string why = too_many ? "more than max_tets = " + std::to_string(p.max_tets) : "";
+  if (too_big)
+    why += std::string(too_many ? ", and " : "") + "needing about " + short_number(e.bytes / 1e9) +
+           " GB where the machine has " + short_number(memory / 1e9) + " GB";
+  throw InvalidInput(who + ": refused: edge_length " + short_number(p.edge_length) + " (h = " + short_number(e.h) +
+                     ") would give about " + short_number(e.tets) + " tets (enclosed volume " + short_number(e.volume) +
+                     " / " + short_number(e.volume / e.tets) + " per tet), " + why +
+                     "; use edge_length >= " + short_number(min_edge * 1.01) +
+                     " or raise max_tets");
+}
+
+/// A coordinate transform x -> (x - centre) / scale that puts the bounding box centre at the origin
+/// and its diagonal at 1: TetGen's tolerances and our volume bound then see the same numbers at any
+/// scale or offset.
+struct Normalization {
+  Eigen::RowVector3d centre;
+  double scale = 1;
+  explicit Normalization(const RowMatrixX3d& V)
+      : centre(0.5 * (V.colwise().maxCoeff() + V.colwise().minCoeff())),
+        scale((V.colwise().maxCoeff() - V.colwise().minCoeff()).norm()) {}
+};
+
+/// Hash of the exact bits of a point, to give input vertices their input coordinates back.
+struct PointBits {
+  std::uint64_t x, y, z;
+  bool operator==(const PointBits& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+struct PointBitsHash {
+  size_t operator()(const PointBits& p) const {
+    return std::hash<std::uint64_t>()(p.x * 0x9E3779B97F4A7C15ull ^ (p.y + 0x632BE59BD9B4E019ull) ^ (p.z << 1));
+  }
+};
+PointBits bits_of(const double* p) {
+  PointBits b;
+  std::memcpy(&b.x, p, 8);
+  std::memcpy(&b.y, p + 1, 8);
+  std::memcpy(&b.z, p + 2, 8);
+  return b;
 }
 
 std::uint64_t edge_key(int a, int b) {
@@ -150,16 +221,46 @@ TetgenStats tet_stats(const TetMesh& mesh, double h) {
   return s;
 }
 
+TetEstimate estimate_tets(const SurfaceMesh& surface, double edge_length) {
+  TetEstimate e;
+  const Normalization n(surface.V);
+  // Enclosed volume by the divergence theorem, in normalized coordinates (then scaled back).
+  double vol = 0;
+  for (Eigen::Index f = 0; f < surface.F.rows(); ++f) {
+    const Vec3 a = (surface.V.row(surface.F(f, 0)) - n.centre) / n.scale,
+               b = (surface.V.row(surface.F(f, 1)) - n.centre) / n.scale,
+               c = (surface.V.row(surface.F(f, 2)) - n.centre) / n.scale;
+    vol += a.dot(b.cross(c)) / 6.0;
+  }
+  const double h_unit = edge_length;  // the target edge in normalized units (diagonal 1)
+  e.h = edge_length * n.scale;
+  e.volume = std::abs(vol) * n.scale * n.scale * n.scale;
+  // TetGen's tets come out smaller than its volume bound (1.5 regular tets): measured on a box, the
+  // mean tet is the volume of a regular tet of edge h divided by 1.4-1.7.
+  e.tets = kTetsPerRegularVolume * std::abs(vol) / (h_unit * h_unit * h_unit / (6.0 * std::sqrt(2.0)));
+  e.bytes = e.tets * kTetgenBytesPerTet;
+  return e;
+}
+
 TetMesh tetrahedralize(const SurfaceMesh& surface, const TetgenParams& p, TetgenStats* stats) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::string who = name_of(surface);
   validate(surface);
   if (!(p.edge_length > 0)) throw InvalidInput(who + ": edge_length must be positive");
-  const double diag = (surface.V.colwise().maxCoeff() - surface.V.colwise().minCoeff()).norm();
-  const double h = p.edge_length * diag;
+  const TetEstimate estimate = estimate_tets(surface, p.edge_length);
+  check_size(estimate, p, who);
+  const Normalization norm(surface.V);
+  const double h = p.edge_length * norm.scale;  // absolute target edge
+  const double h_unit = p.edge_length;          // in normalized coordinates
 
-  const RowMatrixX3d& V = surface.V;
+  // Normalized coordinates, rounded to multiples of 2^-36 (1.5e-11 of the diagonal): a model scaled by
+  // 1e-9 normalizes to numbers a few ulps away from the unit model's, and the rounding makes them
+  // (almost always) bit-identical, so TetGen takes the same decisions and gives the same tets.
+  const RowMatrixX3d V = ((surface.V.rowwise() - norm.centre) / norm.scale * kGrid).array().round() / kGrid;
   const RowMatrixX3i& F = surface.F;
+  std::unordered_map<PointBits, int, PointBitsHash> input_point;
+  input_point.reserve(size_t(V.rows()));
+  for (Eigen::Index i = 0; i < V.rows(); ++i) input_point.emplace(bits_of(V.data() + 3 * i), int(i));
   tetgenio in, out;
   in.firstnumber = 0;
   in.numberofpoints = static_cast<int>(V.rows());
@@ -181,7 +282,7 @@ TetMesh tetrahedralize(const SurfaceMesh& surface, const TetgenParams& p, Tetgen
   // the volume of a regular tet of edge h (h^3 / (6 sqrt 2) ~ 0.118 h^3): measured, this puts the
   // mean interior edge at 0.95-1.0 h (sphere) and the mean edge of a box mesh at 0.93 h, where the
   // plain regular-tet bound gave 0.85 h and 0.78 h.
-  const double max_volume = kVolumeFactor * h * h * h / (6.0 * std::sqrt(2.0));
+  const double max_volume = kVolumeFactor * h_unit * h_unit * h_unit / (6.0 * std::sqrt(2.0));
   std::ostringstream sw;
   sw.precision(17);
   sw << "pzQq" << p.radius_edge << "/" << p.min_dihedral << "a" << max_volume << (p.refine_surface ? "" : "Y");
@@ -212,8 +313,14 @@ TetMesh tetrahedralize(const SurfaceMesh& surface, const TetgenParams& p, Tetgen
       m.T(t, k) = remap[v];
     }
   m.V.resize(nv, 3);
-  for (int i = 0; i < out.numberofpoints; ++i)
-    if (remap[i] >= 0) m.V.row(remap[i]) << out.pointlist[3 * i], out.pointlist[3 * i + 1], out.pointlist[3 * i + 2];
+  // Back to the input's coordinates; input vertices get their exact input coordinates.
+  for (int i = 0; i < out.numberofpoints; ++i) {
+    if (remap[i] < 0) continue;
+    const double* q = out.pointlist + 3 * i;
+    auto it = input_point.find(bits_of(q));
+    if (it != input_point.end()) m.V.row(remap[i]) = surface.V.row(it->second);
+    else m.V.row(remap[i]) = Eigen::RowVector3d(q[0], q[1], q[2]) * norm.scale + norm.centre;
+  }
   for (Eigen::Index t = 0; t < m.T.rows(); ++t) {
     Vec3 a = m.V.row(m.T(t, 0)), b = m.V.row(m.T(t, 1)), c = m.V.row(m.T(t, 2)), d = m.V.row(m.T(t, 3));
     if (tet_volume6(a, b, c, d) < 0) std::swap(m.T(t, 1), m.T(t, 2));
@@ -221,6 +328,7 @@ TetMesh tetrahedralize(const SurfaceMesh& surface, const TetgenParams& p, Tetgen
 
   if (stats) {
     *stats = tet_stats(m, h);
+    stats->estimated_tets = estimate.tets;
     stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
   return m;

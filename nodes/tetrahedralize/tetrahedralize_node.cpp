@@ -14,12 +14,16 @@ const bool registered = register_node(make_node<TetgenParams>(
         .add("min_dihedral", &TetgenParams::min_dihedral, "dihedral angle bound in degrees (TetGen -q ratio/angle)", 0.0,
              18.0)
         .add("refine_surface", &TetgenParams::refine_surface,
-             "let TetGen refine the surface triangles (false: keep them as they are, -Y)"),
+             "let TetGen refine the surface triangles (false: keep them as they are, -Y)")
+        .add("max_tets", &TetgenParams::max_tets,
+             "refuse up front when the estimated tet count (enclosed volume / regular tet of edge h) exceeds this",
+             1000, 2000000000),
     {{"surface", artefact_name<SurfaceMesh>()}}, artefact_name<TetMesh>(),
     [](const TetgenParams& p, const Inputs& in, NodeContext& ctx) {
       TetgenStats s;
       auto mesh = tetrahedralize(*in.get<SurfaceMesh>(0), p, &s);
       ctx.metrics["tets"] = s.tets;
+      ctx.metrics["estimated_tets"] = s.estimated_tets;
       ctx.metrics["vertices"] = s.vertices;
       ctx.metrics["target_edge"] = s.target_edge;
       ctx.metrics["edge_min_rel"] = s.edge_min;
@@ -29,7 +33,7 @@ const bool registered = register_node(make_node<TetgenParams>(
       ctx.metrics["max_radius_edge"] = s.max_radius_edge;
       ctx.metrics["seconds"] = s.seconds;
       return make_artefact(std::move(mesh));
-    }));
+    }).with_version("2"));  // 2: normalized coordinates for TetGen, max_tets
 
 }  // namespace
 }  // namespace polyhex
