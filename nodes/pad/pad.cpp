@@ -3,13 +3,16 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
+#include <map>
 #include <string>
 #include <vector>
 
 #include "nodes/quality/quality.h"
 #include "nodes/quality/triangle_tree.h"
+#include "runtime/cancel.h"
 #include "runtime/errors.h"
 
 namespace polyhex {
@@ -23,16 +26,119 @@ std::array<Vec3, 8> hex_points(const RowMatrixX3d& V, const RowMatrixX8i& H, Eig
   return p;
 }
 
+/// Boundary quads per vertex, and whether every boundary edge is in exactly two boundary quads.
+bool boundary_valence(const HexMesh& m, std::vector<int>& valence) {
+  const auto Q = hex_boundary_quads(m);
+  valence.assign(size_t(m.V.rows()), 0);
+  std::map<std::pair<int, int>, int> edges;
+  for (Eigen::Index q = 0; q < Q.rows(); ++q)
+    for (int k = 0; k < 4; ++k) {
+      ++valence[size_t(Q(q, k))];
+      const int a = Q(q, k), b = Q(q, (k + 1) % 4);
+      ++edges[{std::min(a, b), std::max(a, b)}];
+    }
+  for (const auto& e : edges)
+    if (e.second != 2) return false;
+  return true;
+}
+
+/// The hexes of m but those flagged, unused vertices dropped.
+HexMesh without_hexes(const HexMesh& m, const std::vector<char>& drop) {
+  std::vector<int> map(size_t(m.V.rows()), -1);
+  int nv = 0, nh = 0;
+  for (Eigen::Index h = 0; h < m.H.rows(); ++h)
+    if (!drop[size_t(h)]) {
+      ++nh;
+      for (int k = 0; k < 8; ++k)
+        if (map[size_t(m.H(h, k))] < 0) map[size_t(m.H(h, k))] = 0;
+    }
+  for (auto& x : map)
+    if (x == 0) x = nv++;
+  HexMesh out;
+  out.source = m.source;
+  out.V.resize(nv, 3);
+  for (Eigen::Index v = 0; v < m.V.rows(); ++v)
+    if (map[size_t(v)] >= 0) out.V.row(map[size_t(v)]) = m.V.row(v);
+  out.H.resize(nh, 8);
+  for (Eigen::Index h = 0, r = 0; h < m.H.rows(); ++h)
+    if (!drop[size_t(h)]) {
+      for (int k = 0; k < 8; ++k) out.H(r, k) = map[size_t(m.H(h, k))];
+      ++r;
+    }
+  return out;
+}
+
 }  // namespace
 
-HexMesh pad_boundary(const HexMesh& mesh, const SurfaceMesh* surface, const PadParams& p, PadStats* stats) {
+HexMesh remove_boundary_doublets(const HexMesh& mesh, long* doublets, long* removed) {
+  HexMesh cur = mesh;
+  long found = 0, gone = 0;
+  std::vector<int> valence;
+  boundary_valence(cur, valence);
+  for (int round = 0; round < 5; ++round) {
+    throw_if_interrupted();
+    std::vector<char> doublet(size_t(cur.V.rows()), 0);
+    long n = 0;
+    for (size_t v = 0; v < valence.size(); ++v)
+      if (valence[v] > 0 && valence[v] <= 2) doublet[v] = 1, ++n;
+    if (round == 0) found = n;
+    if (n == 0) break;
+    // boundary faces per hex, and the candidate hex of each doublet
+    const auto Q = hex_boundary_quads(cur);
+    std::map<std::array<int, 4>, int> quad_id;
+    for (Eigen::Index q = 0; q < Q.rows(); ++q) {
+      std::array<int, 4> k = {Q(q, 0), Q(q, 1), Q(q, 2), Q(q, 3)};
+      std::sort(k.begin(), k.end());
+      quad_id[k] = int(q);
+    }
+    static constexpr int kFaces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    std::vector<int> bfaces(size_t(cur.H.rows()), 0);
+    std::vector<int> best(size_t(cur.V.rows()), -1);
+    std::vector<double> best_sj(size_t(cur.V.rows()), 0.0);
+    for (Eigen::Index h = 0; h < cur.H.rows(); ++h) {
+      std::vector<int> touched;
+      for (const auto& f : kFaces) {
+        std::array<int, 4> k = {cur.H(h, f[0]), cur.H(h, f[1]), cur.H(h, f[2]), cur.H(h, f[3])};
+        std::sort(k.begin(), k.end());
+        if (!quad_id.count(k)) continue;
+        ++bfaces[size_t(h)];
+        for (int v : k)
+          if (doublet[size_t(v)]) touched.push_back(v);
+      }
+      if (touched.empty()) continue;
+      const double sj = hex_scaled_jacobian(hex_points(cur.V, cur.H, h)).corner_min;
+      for (int v : touched) {
+        const int b = best[size_t(v)];
+        if (b < 0 || bfaces[size_t(h)] > bfaces[size_t(b)] || (bfaces[size_t(h)] == bfaces[size_t(b)] && sj < best_sj[size_t(v)]))
+          best[size_t(v)] = int(h), best_sj[size_t(v)] = sj;
+      }
+    }
+    std::vector<char> drop(size_t(cur.H.rows()), 0);
+    long k = 0;
+    for (size_t v = 0; v < best.size(); ++v)
+      if (doublet[v] && best[v] >= 0 && !drop[size_t(best[v])]) drop[size_t(best[v])] = 1, ++k;
+    if (k == 0 || k == cur.H.rows()) break;
+    HexMesh next = without_hexes(cur, drop);
+    std::vector<int> next_valence;
+    if (!boundary_valence(next, next_valence)) break;  // would make the boundary non-manifold: keep cur
+    cur = std::move(next);
+    valence.swap(next_valence);
+    gone += k;
+  }
+  if (doublets) *doublets = found;
+  if (removed) *removed = gone;
+  return cur;
+}
+
+HexMesh pad_boundary(const HexMesh& input, const SurfaceMesh* surface, const PadParams& p, PadStats* stats) {
   const auto t0 = std::chrono::steady_clock::now();
-  check_hex_mesh(mesh);
+  check_hex_mesh(input);
+  PadStats st;
+  const HexMesh mesh = p.remove_doublets ? remove_boundary_doublets(input, &st.doublets, &st.hexes_removed) : input;
   const auto Q = hex_boundary_quads(mesh);
   if (Q.rows() == 0) throw InvalidInput((mesh.source.empty() ? std::string("hex mesh") : mesh.source) + ": no boundary quads to pad");
   const Eigen::Index nv = mesh.V.rows(), nh = mesh.H.rows();
 
-  PadStats st;
   std::vector<int> inner(size_t(nv), -1);
   int nb = 0;
   for (Eigen::Index q = 0; q < Q.rows(); ++q)

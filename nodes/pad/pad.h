@@ -10,6 +10,7 @@ namespace polyhex {
 struct PadParams {
   double thickness = 0.4;   ///< inward offset of the inner copies, fraction of the local hex edge, (0, 0.9]
   int max_halvings = 10;    ///< halve a vertex's offset at most this often while a hex it touches is inverted, [0, 30]
+  bool remove_doublets = true;  ///< first remove hexes at boundary doublets (see remove_boundary_doublets)
 };
 
 struct PadStats {
@@ -17,8 +18,21 @@ struct PadStats {
   long vertices_added = 0;  ///< = boundary vertices of the input
   long inverted = 0;        ///< hexes of the result with a corner scaled Jacobian <= 0
   long limited = 0;         ///< boundary vertices whose offset had to be reduced
+  long doublets = 0;        ///< boundary doublet vertices found in the input (remove_doublets)
+  long hexes_removed = 0;   ///< hexes removed to resolve them
   double seconds = 0;
 };
+
+/// Removes hexes at boundary doublets. A doublet is a boundary vertex in only two boundary quads: they
+/// share both of its boundary edges, so on a smooth surface both are flat (180 degrees) at it, and after
+/// padding the two layer hexes on them share two faces and one of them is always inverted or flat there
+/// (the determinants at the doublet have opposite signs). Per doublet, the incident hex with a boundary
+/// face at it that has the most boundary faces (then the lowest corner scaled Jacobian, then the lowest
+/// index) is removed; repeated while doublets remain (at most 5 rounds); a round that would make a
+/// boundary edge non-manifold is undone. Unused vertices are dropped.
+/// \param mesh  conforming hex mesh   \param doublets, removed  out (optional): counts
+/// \return the mesh without those hexes (the input itself if there is no doublet)
+HexMesh remove_boundary_doublets(const HexMesh& mesh, long* doublets = nullptr, long* removed = nullptr);
 
 /// Extrudes the boundary into one layer of hexes. Every boundary vertex v is duplicated: the inner copy
 /// replaces v in the existing hexes and moves inward along the averaged inward normal of its boundary
@@ -27,7 +41,8 @@ struct PadStats {
 /// For each boundary quad (a, b, c, d), outward in its hex, the new hex is (a', b', c', d', a, b, c, d).
 /// \param mesh     conforming hex mesh, VTK_HEXAHEDRON order
 /// \param surface  the input surface or null; if given, the outer vertices are projected onto it
-/// \return the padded mesh: V = [input vertices, inner copies], hexes = [input hexes, layer]
+/// With p.remove_doublets the hexes at boundary doublets are removed first (remove_boundary_doublets).
+/// \return the padded mesh: V = [kept input vertices, inner copies], hexes = [kept input hexes, layer]
 /// \throw InvalidInput when the mesh fails check_hex_mesh or has no boundary
 HexMesh pad_boundary(const HexMesh& mesh, const SurfaceMesh* surface, const PadParams& p = {}, PadStats* stats = nullptr);
 

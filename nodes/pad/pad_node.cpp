@@ -12,7 +12,8 @@ const bool registered = register_node(make_node<P>(
     "pad/extrude", "§6 padding layer: every boundary quad extruded into a hex, inner copies moved inward",
     ParamSet<P>()
         .add("thickness", &P::thickness, "inward offset of the inner layer, fraction of the local hex edge", 1e-3, 0.9)
-        .add("max_halvings", &P::max_halvings, "times a vertex's offset may be halved to avoid inverted hexes", 0, 30),
+        .add("max_halvings", &P::max_halvings, "times a vertex's offset may be halved to avoid inverted hexes", 0, 30)
+        .add("remove_doublets", &P::remove_doublets, "first remove hexes at boundary doublets (boundary vertices in 2 quads)"),
     {{"hexes", artefact_name<HexMesh>()}, {"surface", artefact_name<SurfaceMesh>(), true}}, artefact_name<HexMesh>(),
     [](const P& p, const Inputs& in, NodeContext& ctx) {
       PadStats s;
@@ -21,12 +22,14 @@ const bool registered = register_node(make_node<P>(
       ctx.metrics["hexes_added"] = s.hexes_added;
       ctx.metrics["vertices_added"] = s.vertices_added;
       ctx.metrics["limited"] = s.limited;
+      ctx.metrics["doublets"] = s.doublets;
+      ctx.metrics["hexes_removed"] = s.hexes_removed;
       ctx.metrics["inverted"] = s.inverted;
       ctx.metrics["hexes"] = out.H.rows();
       ctx.metrics["seconds"] = s.seconds;
       if (s.inverted > 0) ctx.warn(std::to_string(s.inverted) + " hexes inverted after padding (optimize untangles them)");
       return make_artefact(std::move(out));
-    }));
+    }).with_version("2"));
 
 }  // namespace
 }  // namespace polyhex
