@@ -266,26 +266,24 @@ TEST_CASE("cli scale: 1e-9 and 1e9 scaled models mesh like the unit model", "[cl
   const json ref = mesh("unit", 1.0);
   const json& q0 = ref["quality"]["metrics"];
   REQUIRE(q0["hexes"].get<int>() > 500);
-  SECTION("power of two (2^-30): every figure identical, so no stage uses an absolute tolerance") {
-    const json n = mesh("p2", std::ldexp(1.0, -30));
-    CHECK(n["tets"]["metrics"]["tets"] == ref["tets"]["metrics"]["tets"]);
-    for (const char* k : {"hexes", "sj_min", "sj_avg", "irregular_pct", "hausdorff_max", "volume_ratio", "inverted"})
-      CHECK(n["quality"]["metrics"][k] == q0[k]);
-  }
+  // Power of two (2^-30): every figure identical, so no stage uses an absolute tolerance.
+  const json p2 = mesh("p2", std::ldexp(1.0, -30));
+  CHECK(p2["tets"]["metrics"]["tets"] == ref["tets"]["metrics"]["tets"]);
+  for (const char* k : {"hexes", "sj_min", "sj_avg", "irregular_pct", "hausdorff_max", "volume_ratio", "inverted"})
+    CHECK(p2["quality"]["metrics"][k] == q0[k]);
+  // Decimal scales: the same tets and hexes; the optimizer's greedy moves depend on rounding, so its
+  // figures agree to a tolerance only (measured: sj_min 0.638 unit, 0.659 at 1e-9, 0.638 at 1e9).
   for (double k : {1e-9, 1e9}) {
-    SECTION("scale " + std::to_string(k)) {
-      const json n = mesh(k < 1 ? "tiny" : "huge", k);
-      const json& q = n["quality"]["metrics"];
-      INFO("scale " << k << ": hexes " << q["hexes"] << " sj_min " << q["sj_min"] << " (unit " << q0["sj_min"] << ")");
-      CHECK(n["tets"]["metrics"]["tets"] == ref["tets"]["metrics"]["tets"]);
-      CHECK(q["hexes"] == q0["hexes"]);
-      CHECK(q["inverted"] == 0);
-      CHECK(q["irregular_pct"] == q0["irregular_pct"]);
-      // The optimizer's greedy moves depend on rounding, so its figures agree to a tolerance only.
-      CHECK(q["sj_min"].get<double>() == Approx(q0["sj_min"].get<double>()).margin(0.05));
-      CHECK(q["sj_avg"].get<double>() == Approx(q0["sj_avg"].get<double>()).margin(0.005));
-      CHECK(q["hausdorff_max"].get<double>() == Approx(q0["hausdorff_max"].get<double>()).margin(0.005));
-      CHECK(q["volume_ratio"].get<double>() == Approx(q0["volume_ratio"].get<double>()).margin(0.005));
-    }
+    const json n = mesh(k < 1 ? "tiny" : "huge", k);
+    const json& q = n["quality"]["metrics"];
+    INFO("scale " << k << ": hexes " << q["hexes"] << " sj_min " << q["sj_min"] << " (unit " << q0["sj_min"] << ")");
+    CHECK(n["tets"]["metrics"]["tets"] == ref["tets"]["metrics"]["tets"]);
+    CHECK(q["hexes"] == q0["hexes"]);
+    CHECK(q["inverted"] == 0);
+    CHECK(q["irregular_pct"] == q0["irregular_pct"]);
+    CHECK(q["sj_min"].get<double>() == Approx(q0["sj_min"].get<double>()).margin(0.05));
+    CHECK(q["sj_avg"].get<double>() == Approx(q0["sj_avg"].get<double>()).margin(0.005));
+    CHECK(q["hausdorff_max"].get<double>() == Approx(q0["hausdorff_max"].get<double>()).margin(0.005));
+    CHECK(q["volume_ratio"].get<double>() == Approx(q0["volume_ratio"].get<double>()).margin(0.005));
   }
 }
