@@ -7,7 +7,9 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <dirent.h>
 #include <mutex>
 #include <string>
@@ -64,6 +66,19 @@ extern "C" void on_block_request(int, siginfo_t*, void* context) {
   g_blocked_threads.fetch_add(1);
 }
 
+/// The blocked-signal mask of thread `tid` (SigBlk in /proc/self/task/TID/status); all ones if unreadable.
+unsigned long long blocked_mask(long tid) {
+  const std::string path = "/proc/self/task/" + std::to_string(tid) + "/status";
+  unsigned long long mask = ~0ULL;
+  if (FILE* f = std::fopen(path.c_str(), "r")) {
+    char line[256];
+    while (std::fgets(line, sizeof line, f))
+      if (std::strncmp(line, "SigBlk:", 7) == 0) mask = std::strtoull(line + 7, nullptr, 16);
+    std::fclose(f);
+  }
+  return mask;
+}
+
 void block_in_other_threads() {
   const int request = SIGRTMIN + 3;
   struct sigaction sa {}, old {};
@@ -78,6 +93,12 @@ void block_in_other_threads() {
     while (dirent* e = ::readdir(d)) {
       const long tid = std::strtol(e->d_name, nullptr, 10);
       if (tid <= 0 || tid == self) continue;
+      // Threads that block SIGINT and SIGTERM already (log4cplus blocks every signal in its threads)
+      // need nothing; a thread that blocks the request signal cannot be asked.
+      const unsigned long long mask = blocked_mask(tid);
+      const auto bit = [](int sig) { return 1ULL << (sig - 1); };
+      if ((mask & bit(SIGINT)) && (mask & bit(SIGTERM))) continue;
+      if (mask & bit(request)) continue;
       if (::syscall(SYS_tgkill, pid, static_cast<pid_t>(tid), request) == 0) ++sent;
     }
     ::closedir(d);
