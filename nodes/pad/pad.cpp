@@ -26,8 +26,8 @@ std::array<Vec3, 8> hex_points(const RowMatrixX3d& V, const RowMatrixX8i& H, Eig
   return p;
 }
 
-/// Boundary quads per vertex, and whether every boundary edge is in exactly two boundary quads.
-bool boundary_valence(const HexMesh& m, std::vector<int>& valence) {
+/// Boundary quads per vertex; returns the number of boundary edges not in exactly two boundary quads.
+long boundary_valence(const HexMesh& m, std::vector<int>& valence) {
   const auto Q = hex_boundary_quads(m);
   valence.assign(size_t(m.V.rows()), 0);
   std::map<std::pair<int, int>, int> edges;
@@ -37,9 +37,9 @@ bool boundary_valence(const HexMesh& m, std::vector<int>& valence) {
       const int a = Q(q, k), b = Q(q, (k + 1) % 4);
       ++edges[{std::min(a, b), std::max(a, b)}];
     }
-  for (const auto& e : edges)
-    if (e.second != 2) return false;
-  return true;
+  long bad = 0;
+  for (const auto& e : edges) bad += e.second != 2;
+  return bad;
 }
 
 /// The hexes of m but those flagged, unused vertices dropped.
@@ -74,7 +74,7 @@ HexMesh remove_boundary_doublets(const HexMesh& mesh, long* doublets, long* remo
   HexMesh cur = mesh;
   long found = 0, gone = 0;
   std::vector<int> valence;
-  boundary_valence(cur, valence);
+  long bad = boundary_valence(cur, valence);  // non-manifold boundary edges: removals must not add any
   for (int round = 0; round < 5; ++round) {
     throw_if_interrupted();
     std::vector<char> doublet(size_t(cur.V.rows()), 0);
@@ -120,7 +120,23 @@ HexMesh remove_boundary_doublets(const HexMesh& mesh, long* doublets, long* remo
     if (k == 0 || k == cur.H.rows()) break;
     HexMesh next = without_hexes(cur, drop);
     std::vector<int> next_valence;
-    if (!boundary_valence(next, next_valence)) break;  // would make the boundary non-manifold: keep cur
+    long next_bad = boundary_valence(next, next_valence);
+    if (next_bad > bad) {
+      // together they make the boundary non-manifold: keep those that do not, one at a time (in index order)
+      std::vector<char> ok(drop.size(), 0);
+      k = 0;
+      for (size_t h = 0; h < drop.size(); ++h) {
+        if (!drop[h]) continue;
+        throw_if_interrupted();
+        ok[h] = 1;
+        if (boundary_valence(without_hexes(cur, ok), next_valence) <= bad) ++k;
+        else ok[h] = 0;
+      }
+      if (k == 0) break;
+      next = without_hexes(cur, ok);
+      next_bad = boundary_valence(next, next_valence);
+    }
+    bad = next_bad;
     cur = std::move(next);
     valence.swap(next_valence);
     gone += k;
