@@ -90,6 +90,9 @@ json load_config_json(const std::filesystem::path& path, const std::map<std::str
     j = json::parse(ss.str());
   } catch (const json::parse_error& e) {
     throw ConfigError(path.string() + ": not valid JSON: " + e.what());
+  } catch (const json::exception& e) {
+    // e.g. out_of_range 406 for a number beyond a double (1e400)
+    throw ConfigError(path.string() + ": unusable JSON: " + e.what());
   }
   return substitute_vars(j, vars, path.string());
 }

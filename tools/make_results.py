@@ -32,7 +32,7 @@ BEST = {"bumpy_torus": ("Huang 2014", .335, .929), "casting": ("Gregson 2011", .
 def run_model(args, surf, out):
     if args.reuse and (out / "report.json").exists():
         return 0, 0.0, json.loads((out / "report.json").read_text()), []
-    cmd = [args.polyhex, "run", args.config, "--input", str(surf), "--out", str(out)]
+    cmd = [args.polyhex, "run", args.config, "--input", str(surf), "--out", str(out), "--no-cache"]
     if args.threads:
         cmd += ["--threads", str(args.threads)]
     for s in args.set or []:

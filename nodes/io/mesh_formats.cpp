@@ -233,14 +233,15 @@ struct VtkValues {
   template <class T, class Out>
   void read_binary(size_t n, std::vector<Out>& out, const char* what) {
     BinaryCursor b(text.text(), text.pos(), true, file);
-    for (size_t i = 0; i < n; ++i) out[i] = Out(b.get<T>(what));
+    for (size_t i = 0; i < n; ++i) out.push_back(Out(b.get<T>(what)));
     text.seek(b.pos());
   }
   // Reads n values of VTK type `type` (float, double, int, ...) into out (as double).
   void read(const std::string& type, size_t n, std::vector<double>& out, const char* what) {
-    out.resize(n);
+    out.clear();
+    out.reserve(text.reserve_hint((long long)n, 2));
     if (!binary) {
-      for (size_t i = 0; i < n; ++i) out[i] = text.real(what);
+      for (size_t i = 0; i < n; ++i) out.push_back(text.real(what));
       return;
     }
     if (type == "double") read_binary<double>(n, out, what);
@@ -255,9 +256,10 @@ struct VtkValues {
       if (!std::isfinite(out[i])) text.fail(std::string(what) + " " + std::to_string(i) + " is not finite");
   }
   void read_ints(size_t n, std::vector<long long>& out, const char* what) {
-    out.resize(n);
+    out.clear();
+    out.reserve(text.reserve_hint((long long)n, 2));
     if (!binary) {
-      for (size_t i = 0; i < n; ++i) out[i] = text.integer(what);
+      for (size_t i = 0; i < n; ++i) out.push_back(text.integer(what));
       return;
     }
     read_binary<int32_t>(n, out, what);
@@ -411,22 +413,25 @@ CellsRead read_medit_cells(const std::filesystem::path& path, const std::string&
     } else if (key == "Vertices") {
       long long n = c.integer("number of vertices");
       if (n < 0) c.fail("negative vertex count");
-      xyz.resize(size_t(3 * n));
+      xyz.clear();
+      xyz.reserve(3 * c.reserve_hint(n, 8));
       for (long long i = 0; i < n; ++i) {
-        for (int k = 0; k < 3; ++k) xyz[size_t(3 * i + k)] = c.real("vertex coordinate");
+        for (int k = 0; k < 3; ++k) xyz.push_back(c.real("vertex coordinate"));
         c.integer("vertex reference");
       }
       have_vertices = true;
     } else if (key == section) {
       long long n = c.integer("number of " + section);
       if (n < 0) c.fail("negative " + section + " count");
-      raw.resize(size_t(n * nodes));
-      cell_line.resize(size_t(n));
+      raw.clear();
+      cell_line.clear();
+      raw.reserve(c.reserve_hint(n, size_t(2 * (nodes + 1))) * size_t(nodes));
+      cell_line.reserve(c.reserve_hint(n, size_t(2 * (nodes + 1))));
       const std::string index_what = section + " vertex index", ref_what = section + " reference";
       for (long long i = 0; i < n; ++i) {
         for (int k = 0; k < nodes; ++k) {
-          raw[size_t(i * nodes + k)] = c.integer(index_what);
-          if (k == 0) cell_line[size_t(i)] = c.line_no();
+          raw.push_back(c.integer(index_what));
+          if (k == 0) cell_line.push_back(c.line_no());
         }
         c.integer(ref_what);
       }
@@ -539,8 +544,9 @@ CellsRead read_gmsh_cells(const std::filesystem::path& path, int gmsh_type, int 
         for (long long b = 0; b < blocks; ++b) {
           expect_line("node block header");
           long long count = count_field(c, w, 3, "number of nodes in block");
-          std::vector<long long> tags(static_cast<size_t>(count));
-          for (auto& t : tags) t = c.integer("node tag");
+          std::vector<long long> tags;
+          tags.reserve(c.reserve_hint(count, 2));
+          for (long long k = 0; k < count; ++k) tags.push_back(c.integer("node tag"));
           for (auto t : tags) {
             expect_line("node coordinates");
             add_node(t, l);

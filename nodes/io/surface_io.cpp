@@ -113,7 +113,7 @@ RawSurface parse_off(std::string_view text, const std::string& file) {
   if (counts.size() < 2 || !io_detail::parse_int(counts[0], nv) || !io_detail::parse_int(counts[1], nf) || nv < 0 ||
       nf < 0)
     c.fail("expected the counts `vertices faces edges`");
-  s.V.reserve(size_t(3 * nv));
+  s.V.reserve(3 * c.reserve_hint(nv, 6));
   for (long long i = 0; i < nv; ++i) {
     if (!c.next_line(l))
       c.fail("truncated: the header announces " + vertex_count(size_t(nv)) + ", the file ends after " + std::to_string(i));
@@ -128,7 +128,7 @@ RawSurface parse_off(std::string_view text, const std::string& file) {
     }
   }
   std::vector<int> idx;
-  s.F.reserve(size_t(3 * nf));
+  s.F.reserve(3 * c.reserve_hint(nf, 8));
   for (long long f = 0; f < nf; ++f) {
     if (!c.next_line(l))
       c.fail("truncated: the header announces " + std::to_string(nf) + " faces, the file ends after " + std::to_string(f));
@@ -381,7 +381,7 @@ RawSurface parse_ply(std::string_view data, const std::string& file) {
       if (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0) throw IOError(file + ": PLY vertex element has no x, y, z properties");
       have_vertex = true;
       nv = e.count;
-      s.V.resize(size_t(3 * e.count));
+      s.V.reserve(3 * h.reserve_hint(e.count, e.props.size()));
     } else if (e.name == "face") {
       for (size_t p = 0; p < e.props.size() && list < 0; ++p)
         if (!e.props[p].count_type.empty() && (e.props[p].name == "vertex_indices" || e.props[p].name == "vertex_index"))
@@ -402,6 +402,7 @@ RawSurface parse_ply(std::string_view data, const std::string& file) {
           for (int k = 0; k < 3; ++k)
             if (xyz[k] == int(p)) {
               if (!std::isfinite(x)) throw IOError(file + ": vertex " + std::to_string(i) + " has a non-finite coordinate");
+              if (s.V.size() < size_t(3 * (i + 1))) s.V.resize(size_t(3 * (i + 1)));  // grows as read
               s.V[size_t(3 * i + k)] = x;
             }
           continue;

@@ -36,7 +36,8 @@ CellsRead read_tetgen(const std::filesystem::path& given) {
     if (w.size() < 2 || !io_detail::parse_int(w[0], n) || !io_detail::parse_int(w[1], dim) || n < 0)
       c.fail("expected `points dimension attributes boundary-markers`");
     if (dim != 3) c.fail("dimension " + std::to_string(dim) + " is not supported (expected 3)");
-    r.V.resize(n, 3);
+    std::vector<double> xyz;
+    xyz.reserve(3 * c.reserve_hint(n, 8));
     for (long long i = 0; i < n; ++i) {
       if (!c.next_line(l))
         c.fail("truncated: the header announces " + vertex_count(size_t(n)) + ", the file ends after " + std::to_string(i));
@@ -54,10 +55,11 @@ CellsRead read_tetgen(const std::filesystem::path& given) {
         if (!io_detail::parse_double(w[size_t(k + 1)], x))
           c.fail("expected a coordinate, got `" + std::string(w[size_t(k + 1)]) + "`");
         if (!std::isfinite(x)) c.fail("point " + std::to_string(idx) + " has a non-finite coordinate");
-        r.V(i, k) = x;
+        xyz.push_back(x);
       }
     }
     if (c.next_line(l)) c.fail("more data after the " + vertex_count(size_t(n)) + " the header announces (wrong counts?)");
+    r.V = Eigen::Map<const RowMatrixX3d>(xyz.data(), Eigen::Index(n), 3);
   }
   const std::string file = ele_path.string();
   const std::string data = io_detail::load_file(ele_path);
@@ -69,7 +71,7 @@ CellsRead read_tetgen(const std::filesystem::path& given) {
     c.fail("expected `tetrahedra nodes-per-tet attributes`");
   if (per != 4 && per != 10) c.fail(std::to_string(per) + " nodes per tet is not supported (expected 4 or 10)");
   const size_t nv = size_t(r.V.rows());
-  r.cells.reserve(size_t(4 * m));
+  r.cells.reserve(4 * c.reserve_hint(m, 10));
   for (long long t = 0; t < m; ++t) {
     if (!c.next_line(l))
       c.fail("truncated: the header announces " + std::to_string(m) + " tets, the file ends after " + std::to_string(t));

@@ -156,6 +156,12 @@ int TextCursor::eof_line() const {
   return (!text_.empty() && text_.back() == '\n' && line_ > 1) ? line_ - 1 : line_;
 }
 
+size_t TextCursor::reserve_hint(long long n, size_t min_bytes) const {
+  if (n <= 0) return 0;
+  const size_t fit = (remaining() + 1) / std::max<size_t>(min_bytes, 1);
+  return std::min(static_cast<size_t>(n), fit);
+}
+
 void TextCursor::fail(const std::string& msg) const {
   throw IOError(file_ + ": line " + std::to_string(last_line_) + ": " + msg);
 }

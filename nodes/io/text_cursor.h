@@ -49,6 +49,13 @@ class TextCursor {
   bool line(std::string_view& out);
   /// Next line that is not empty once comments and blanks are removed (returned without the comment).
   bool next_line(std::string_view& out);
+  /// Bytes from the cursor to the end of the text.
+  size_t remaining() const { return text_.size() - pos_; }
+  /// How many items to reserve for a count read from a header: n, but never more than the items of at
+  /// least `min_bytes` each (a text line "0 0 0" needs 6 with its newline) that fit in what remains of
+  /// the file, so a forged count cannot make a reader allocate without bound. The reading loop then
+  /// fails with its own "truncated" message. 0 for a negative n.
+  size_t reserve_hint(long long n, size_t min_bytes) const;
   /// Line number (1-based) of the last token or line returned.
   int line_no() const { return last_line_; }
   size_t pos() const { return pos_; }

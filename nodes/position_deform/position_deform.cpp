@@ -1,5 +1,7 @@
 #include "nodes/position_deform/position_deform.h"
 
+#include <cstdio>
+
 #include <Eigen/Dense>
 #include <Eigen/IterativeLinearSolvers>
 #include <oneapi/tbb/parallel_for.h>
@@ -7,6 +9,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <numeric>
@@ -142,6 +145,25 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
   const double diag = (input.V.colwise().maxCoeff() - input.V.colwise().minCoeff()).norm();
   const double h = p.edge_length * diag;
   const double min_d = 2.0 * h, sigma = 3.0 * min_d;
+  {
+    // Refuse a hex edge length the machine cannot afford before any work: the lattice gives about
+    // volume / h³ hexes.
+    double volume = 0;
+    for (Eigen::Index t = 0; t < input.T.rows(); ++t) {
+      const Eigen::Vector3d a = input.V.row(input.T(t, 0)), b = input.V.row(input.T(t, 1)),
+                            c = input.V.row(input.T(t, 2)), d = input.V.row(input.T(t, 3));
+      volume += std::abs((b - a).cross(c - a).dot(d - a)) / 6.0;
+    }
+    const double estimate = volume / (h * h * h);
+    if (estimate > p.max_hexes) {
+      char msg[320];
+      std::snprintf(msg, sizeof msg,
+                    ": refused: edge_length %g would give about %.3g hexes (volume / h^3), more than max_hexes = %.3g; "
+                    "use edge_length >= %.3g or raise max_hexes",
+                    p.edge_length, estimate, p.max_hexes, p.edge_length * std::cbrt(estimate / p.max_hexes));
+      throw InvalidInput(input.source + msg);
+    }
+  }
 
   auto edges = tet_edges(input.T);
   Graph graph(nV, edges);

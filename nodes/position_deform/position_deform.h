@@ -38,6 +38,7 @@ struct PositionDeformParams {
   double edge_length = 0.01;        ///< hex edge length h, fraction of the input's bbox diagonal (§6: 1 %), [1e-4, 0.5]
   double distance_weight = 1.0;     ///< scale s of the distance-preservation constraints (0 disables them), [0, 1e6]
   std::string final_solve = "mvc_laplace";  ///< "mvc_laplace" (§5.2) or "poisson"
+  double max_hexes = 2e7;           ///< refuse up front when the hex count estimate (volume / h³) exceeds this, [1e3, 2e9]
 };
 
 struct PositionDeformStats {
@@ -61,7 +62,8 @@ struct PositionDeformStats {
 /// \param deformed   rotation-driven deformation of `input` (same connectivity)
 /// \param seg        PolyCube structure of the deformed boundary (§5.1); its triangles index input.V
 /// \pre deformed.V.rows() == input.V.rows(), seg.F indexes input.V, seg.chart in [0, #charts)
-/// \throw InvalidInput when sizes disagree or the structure has no chart on some axis;
+/// \throw InvalidInput when sizes disagree or the structure has no chart on some axis, or when the
+///        input's volume / h³ (the hex count the lattice would give) exceeds p.max_hexes;
 ///        SolverError when a linear solve fails; ConfigError for an unknown final_solve;
 ///        Interrupted after SIGINT/SIGTERM (runtime/cancel.h), checked per axis and before each solve
 PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input, const TetMesh& deformed,

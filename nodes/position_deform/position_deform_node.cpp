@@ -16,7 +16,8 @@ const bool registered = register_node(make_node<P>(
         .add("edge_length", &P::edge_length, "hex edge length, fraction of the input's bbox diagonal", 1e-4, 0.5)
         .add("distance_weight", &P::distance_weight, "scale of the same-axis chart distance constraints (0 = off)", 0.0, 1e6)
         .add_choice("final_solve", &P::final_solve, {"mvc_laplace", "poisson"},
-                    "final solve with pinned charts: mean value Laplace (paper) or Poisson"),
+                    "final solve with pinned charts: mean value Laplace (paper) or Poisson")
+        .add("max_hexes", &P::max_hexes, "refuse up front when volume / h^3 exceeds this", 1e3, 2e9),
     {{"tets", artefact_name<TetMesh>()},
      {"deformed", artefact_name<TetMesh>()},
      {"segmentation", artefact_name<PolyCubeSegmentation>()}},

@@ -2,9 +2,8 @@
 // hand-written inputs of the same class) is fed to its reader, which must throw polyhex::Error: not
 // crash, not throw std::bad_alloc / std::length_error, not try to allocate what a header count says.
 //
-// [!mayfail] while the bugs are open (nodes/io and graph/config.cpp are not this test's files): the
-// readers use a header count to reserve/resize before checking it against the file; load_config_json
-// lets nlohmann's out_of_range (a number like 1e400) escape as a non-polyhex exception.
+// The bugs they caught: readers reserved/resized by a header count before checking it against the file
+// (now TextCursor::checked_count); load_config_json let nlohmann's out_of_range (1e400) escape.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -54,19 +53,19 @@ void check_target(const std::string& target, size_t at_least, Read read) {
 
 }  // namespace
 
-TEST_CASE("fuzz regressions: surface readers (OBJ/OFF/STL/PLY)", "[robust][!mayfail]") {
+TEST_CASE("fuzz regressions: surface readers (OBJ/OFF/STL/PLY)", "[robust]") {
   check_target("surface", 5, [](const uint8_t* d, size_t n) { polyhex_fuzz::read_surface_input(d, n, nullptr); });
 }
 
-TEST_CASE("fuzz regressions: tet mesh readers (Medit/VTK/Gmsh/TetGen)", "[robust][!mayfail]") {
+TEST_CASE("fuzz regressions: tet mesh readers (Medit/VTK/Gmsh/TetGen)", "[robust]") {
   check_target("tetmesh", 8, [](const uint8_t* d, size_t n) { polyhex_fuzz::read_tetmesh_input(d, n, nullptr); });
 }
 
-TEST_CASE("fuzz regressions: hex mesh readers (VTK/Medit/Gmsh)", "[robust][!mayfail]") {
+TEST_CASE("fuzz regressions: hex mesh readers (VTK/Medit/Gmsh)", "[robust]") {
   check_target("hexmesh", 2, [](const uint8_t* d, size_t n) { polyhex_fuzz::read_hexmesh_input(d, n, nullptr); });
 }
 
-TEST_CASE("fuzz regressions: config path (load, parse, build)", "[robust][!mayfail]") {
+TEST_CASE("fuzz regressions: config path (load, parse, build)", "[robust]") {
   const auto files = fixtures("config");
   REQUIRE(files.size() >= 2);
   for (const fs::path& f : files) {

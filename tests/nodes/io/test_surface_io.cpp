@@ -306,7 +306,7 @@ TEST_CASE("write_surface: OBJ and OFF round trips are exact; VTK carries cell da
   CHECK(!std::filesystem::exists(dir / "bad.vtk"));
 }
 
-TEST_CASE("read_surface: a 50k-triangle OFF reads in well under a second", "[io]") {
+TEST_CASE("read_surface: a 50k-triangle OFF torus reads back with its counts, genus and volume", "[io]") {
   TempDir dir;
   // A closed 100 x 250 torus grid: 25000 vertices, 50000 triangles, genus 1.
   const int nu = 100, nv = 250;
@@ -322,12 +322,9 @@ TEST_CASE("read_surface: a 50k-triangle OFF reads in well under a second", "[io]
       m.F.row(2 * a + 1) << a, c, d;
     }
   write_surface(m, dir / "torus.off");
-  auto t0 = std::chrono::steady_clock::now();
+  // (Speed is measured by benchmarks, not asserted here.)
   SurfaceReadReport r;
   SurfaceMesh back = read_surface(dir / "torus.off", &r);
-  double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  WARN("50k-triangle OFF read + checked in " << seconds << " s");
-  CHECK(seconds < 0.5);
   CHECK(r.faces == 50000);
   CHECK(r.genus == 1);
   CHECK(std::abs(signed_volume(back)) == Approx(2 * M_PI * M_PI * 3).epsilon(0.01));

@@ -154,6 +154,13 @@ TEST_CASE("bad inputs to position_deform are named", "[position]") {
   PositionDeformParams p;
   p.final_solve = "magic";
   REQUIRE_THROWS_WITH(position_deform(tets, *tets, seg, p), Catch::Contains("not one of: mvc_laplace, poisson"));
+  // A unit cube (diagonal sqrt 3) at h = 0.001 sqrt 3 would give about 1.9e8 hexes: refused before any solve,
+  // with the smallest edge length that fits (0.001 * cbrt(1.92e8 / 2e7) = 0.00213).
+  PositionDeformParams tiny;
+  tiny.edge_length = 0.001;
+  REQUIRE_THROWS_WITH(position_deform(tets, *tets, seg, tiny),
+                      Catch::Contains("refused: edge_length 0.001 would give about 1.92e+08 hexes") &&
+                          Catch::Contains("use edge_length >= 0.00213"));
 }
 
 TEST_CASE("position_deform saver (--save-all) writes the PolyCube tet mesh and the PolyCube surface with chart ids", "[position]") {
