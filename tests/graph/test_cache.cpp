@@ -16,10 +16,12 @@
 #include "graph/pipeline.h"
 #include "nodes/io/surface_io.h"
 #include "nodes/shapes/shapes.h"
+#include "tests/helpers/cli.h"
 
 using namespace polyhex;
 using Catch::Matchers::Contains;
 namespace fs = std::filesystem;
+using polyhex::test::read_text;
 
 namespace {
 
@@ -100,13 +102,6 @@ const bool registered = [] {
   return true;
 }();
 
-fs::path temp_dir(const std::string& name) {
-  auto d = fs::temp_directory_path() / ("polyhex_cache_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
 Pipeline build(const json& nodes) { return Pipeline::build(parse_config(json{{"nodes", nodes}}, "<test>")); }
 
 json small_graph(double size, double factor) {
@@ -152,10 +147,6 @@ json box_chain(const json& surface, double tet_edge) {
   });
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
 void spit(const fs::path& p, const std::string& s) { std::ofstream(p, std::ios::binary | std::ios::trunc) << s; }
 
 // The payload of an entry (layout in graph/cache.h): after the magic, two versions and the type and
@@ -217,7 +208,7 @@ TEST_CASE("cache: sizes parse with binary units; bad sizes are config errors", "
 }
 
 TEST_CASE("cache: a second run loads every cacheable node; metrics and warnings are restored; sinks run", "[cache]") {
-  fs::path dir = temp_dir("hit");
+  fs::path dir = polyhex::test::fresh_dir("cache_hit");
   Pipeline p = build(small_graph(1.0, 3.0));
   g_src_calls = g_scale_calls = g_blob_calls = g_sink_calls = 0;
   RunResult a = run(p, dir);
@@ -258,7 +249,7 @@ TEST_CASE("cache: a second run loads every cacheable node; metrics and warnings 
 }
 
 TEST_CASE("cache: a param change recomputes only the node and its downstream", "[cache]") {
-  fs::path dir = temp_dir("downstream");
+  fs::path dir = polyhex::test::fresh_dir("cache_downstream");
   g_src_calls = g_scale_calls = 0;
   run(build(small_graph(1.0, 3.0)), dir);
   RunResult r = run(build(small_graph(1.0, 5.0)), dir, "out2");
@@ -282,7 +273,7 @@ TEST_CASE("cache: a param change recomputes only the node and its downstream", "
 }
 
 TEST_CASE("cache: a changed input file invalidates its reader and everything downstream", "[cache]") {
-  fs::path dir = temp_dir("file");
+  fs::path dir = polyhex::test::fresh_dir("cache_file");
   ShapeParams sp;
   sp.name = "box";
   sp.resolution = 8;
@@ -295,7 +286,7 @@ TEST_CASE("cache: a changed input file invalidates its reader and everything dow
   CHECK(rec(b, "surface").cache_hit);
   CHECK(rec(b, "tets").cache_hit);
   CHECK(rec(b, "hex").cache_hit);
-  CHECK(slurp(dir / "a" / "hex.vtk") == slurp(dir / "b" / "hex.vtk"));
+  CHECK(read_text(dir / "a" / "hex.vtk") == read_text(dir / "b" / "hex.vtk"));
 
   // the same bytes rewritten (new modification time): still a hit
   write_surface(box, surf);
@@ -308,7 +299,7 @@ TEST_CASE("cache: a changed input file invalidates its reader and everything dow
   CHECK_FALSE(rec(d, "surface").cache_hit);
   CHECK_FALSE(rec(d, "tets").cache_hit);
   CHECK_FALSE(rec(d, "hex").cache_hit);
-  CHECK(slurp(dir / "a" / "hex.vtk") != slurp(dir / "d" / "hex.vtk"));
+  CHECK(read_text(dir / "a" / "hex.vtk") != read_text(dir / "d" / "hex.vtk"));
 
   // an unreadable input file is not cached and fails in the reader with its own message
   fs::remove(surf);
@@ -322,15 +313,15 @@ TEST_CASE("cache: a changed input file invalidates its reader and everything dow
 
 TEST_CASE("cache: corrupt, truncated and old-version entries are ignored with a warning, recomputed and rewritten",
           "[cache]") {
-  fs::path dir = temp_dir("corrupt");
+  fs::path dir = polyhex::test::fresh_dir("cache_corrupt");
   Pipeline p = build(box_chain(small_box(), 0.3));
   RunResult first = run(p, dir, "first");
-  const std::string reference = slurp(dir / "first" / "hex.vtk");
+  const std::string reference = read_text(dir / "first" / "hex.vtk");
   REQUIRE(reference.size() > 1000);
   ArtefactCache cache(dir / "cache");
   const fs::path entry = cache.entry_path("tetrahedralize/tetgen", p.cache_keys()[1]);
   REQUIRE(fs::exists(entry));
-  const std::string good = slurp(entry);
+  const std::string good = read_text(entry);
 
   struct Damage {
     std::string name, expected;
@@ -367,8 +358,8 @@ TEST_CASE("cache: corrupt, truncated and old-version entries are ignored with a 
       CHECK_THAT(w[0], Contains("cache: ignored entry " + entry.filename().string()) && Contains(d.expected) &&
                            Contains("recomputed"));
       CHECK(without_seconds(rec(r, "tets").metrics) == without_seconds(rec(first, "tets").metrics));
-      CHECK(slurp(dir / "damaged" / "hex.vtk") == reference);
-      CHECK(payload_of(slurp(entry)) == payload_of(good));  // rewritten with the same (recomputed) tets
+      CHECK(read_text(dir / "damaged" / "hex.vtk") == reference);
+      CHECK(payload_of(read_text(entry)) == payload_of(good));  // rewritten with the same (recomputed) tets
       RunResult again = run(p, dir, "again");
       CHECK(rec(again, "tets").cache_hit);
       CHECK(rec(again, "tets").warnings.empty());
@@ -379,7 +370,7 @@ TEST_CASE("cache: corrupt, truncated and old-version entries are ignored with a 
 
 TEST_CASE("cache: stats count entries per node type; prune removes the least recently used; clear empties",
           "[cache]") {
-  fs::path dir = temp_dir("prune");
+  fs::path dir = polyhex::test::fresh_dir("cache_prune");
   ArtefactCache cache(dir / "cache");
   CHECK(cache.stats().entries == 0);  // missing folder = empty
   const Artefact a = make_artefact(tetra(1.0));
@@ -425,7 +416,7 @@ TEST_CASE("cache: stats count entries per node type; prune removes the least rec
 }
 
 TEST_CASE("cache: concurrent runs of one pipeline in one process share a cache", "[cache]") {
-  fs::path dir = temp_dir("threads");
+  fs::path dir = polyhex::test::fresh_dir("cache_threads");
   Pipeline p = build(box_chain(small_box(), 0.3));
   std::vector<RunResult> results(3);
   std::vector<std::thread> threads;
@@ -438,12 +429,12 @@ TEST_CASE("cache: concurrent runs of one pipeline in one process share a cache",
       results[k] = p.run(opt);
     });
   for (auto& t : threads) t.join();
-  const std::string reference = slurp(dir / "out0" / "hex.vtk");
+  const std::string reference = read_text(dir / "out0" / "hex.vtk");
   for (int k = 0; k < 3; ++k) {
     INFO(results[k].error);
     CHECK(results[k].error.empty());
     for (auto& n : results[k].nodes) CHECK(n.warnings.empty());
-    CHECK(slurp(dir / ("out" + std::to_string(k)) / "hex.vtk") == reference);
+    CHECK(read_text(dir / ("out" + std::to_string(k)) / "hex.vtk") == reference);
   }
   CHECK(ArtefactCache(dir / "cache").stats().entries == 3);
   CHECK(ArtefactCache(dir / "cache").stats().temp_files == 0);
@@ -451,7 +442,7 @@ TEST_CASE("cache: concurrent runs of one pipeline in one process share a cache",
 }
 
 TEST_CASE("cache: swapping the hex stage variant reuses every upstream node", "[cache]") {
-  fs::path dir = temp_dir("variant");
+  fs::path dir = polyhex::test::fresh_dir("cache_variant");
   auto graph = [](const json& hex) {
     return json::array({
         small_box(),

@@ -7,10 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <array>
-#include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -18,48 +15,24 @@
 
 #include "nodes/io/surface_io.h"
 #include "nodes/shapes/shapes.h"
+#include "tests/helpers/cli.h"
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
 using json = nlohmann::json;
+using polyhex::test::CliRun;
+using polyhex::test::TempDir;
 
 namespace {
 
-struct Run {
-  int code = -1;
-  std::string err;  // stderr (stdout is discarded)
-  double seconds = 0;
-};
-
-/// Runs `sh -c "<prefix> exec polyhex <args>"`; stderr captured.
-Run run_cli(const std::string& args, const std::string& prefix = "") {
-  const std::string cmd = "sh -c '" + prefix + "exec " + std::string(POLYHEX_BINARY) + " " + args + " 2>&1 >/dev/null'";
-  Run r;
-  const auto t0 = std::chrono::steady_clock::now();
-  FILE* p = popen(cmd.c_str(), "r");
-  REQUIRE(p);
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.err.append(buf.data(), n);
-  const int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+/// Runs `sh -c "<prefix> exec polyhex <args>"`; stderr captured in `err` (stdout is discarded).
+CliRun run_cli(const std::string& args, const std::string& prefix = "") {
+  CliRun r = polyhex::test::run_command("sh -c '" + prefix + "exec " + std::string(POLYHEX_BINARY) + " " + args +
+                                        " 2>&1 >/dev/null'");
+  r.err = std::move(r.out);
+  r.out.clear();
   return r;
 }
-
-struct Dir {
-  fs::path path;
-  explicit Dir(const std::string& name) {
-    path = fs::temp_directory_path() / ("polyhex_badinput_" + name + "_" + std::to_string(::getpid()));
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~Dir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  fs::path operator/(const std::string& n) const { return path / n; }
-};
 
 std::string config(const std::string& name) { return std::string(POLYHEX_SOURCE_DIR) + "/configs/" + name; }
 
@@ -82,7 +55,7 @@ void check_nothing_written(const fs::path& out) {
 /// `polyhex run CONFIG --input IN --out OUT` exits 1, names `node` and says "IN: message", writes no mesh.
 void expect_refused(const std::string& cfg, const fs::path& in, const fs::path& out, const std::string& node,
                     const std::string& message) {
-  Run r = run_cli("run " + cfg + " --input " + in.string() + " --out " + out.string() + " --no-cache");
+  CliRun r = run_cli("run " + cfg + " --input " + in.string() + " --out " + out.string() + " --no-cache");
   INFO(r.err);
   CHECK(r.code == 1);
   CHECK_THAT(r.err, Contains(node) && Contains(in.string() + ": " + message));
@@ -94,7 +67,7 @@ const std::string kTetV = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n";
 }  // namespace
 
 TEST_CASE("cli bad input: bad surfaces exit 1 naming node `surface` and the file, no mesh", "[cli][badinput]") {
-  Dir d("surfaces");
+  TempDir d("badinput_surfaces");
   std::string stl_bin(84 + 50, '\0');
   stl_bin[80] = 2;  // announces 2 triangles, holds 1
   struct Case {
@@ -124,7 +97,7 @@ TEST_CASE("cli bad input: bad surfaces exit 1 naming node `surface` and the file
 }
 
 TEST_CASE("cli bad input: a self-intersecting surface is stopped at node `tets`", "[cli][badinput]") {
-  Dir d("selfx");
+  TempDir d("badinput_selfx");
   // Two unit cubes overlapping: each closed and manifold, together self-intersecting.
   std::string s;
   const char* faces = "1 3 2\n1 4 3\n5 6 7\n5 7 8\n1 2 6\n1 6 5\n2 3 7\n2 7 6\n3 4 8\n3 8 7\n4 1 5\n4 5 8\n";
@@ -145,7 +118,7 @@ TEST_CASE("cli bad input: a self-intersecting surface is stopped at node `tets`"
     i = j + 1;
   }
   const fs::path in = write(d / "two_cubes.obj", s + f1), out = d / "out";
-  Run r = run_cli("run " + config("default.json") + " --input " + in.string() + " --out " + out.string() + " --no-cache");
+  CliRun r = run_cli("run " + config("default.json") + " --input " + in.string() + " --out " + out.string() + " --no-cache");
   INFO(r.err);
   CHECK(r.code == 1);
   CHECK_THAT(r.err, Contains("node `tets` (`tetrahedralize/tetgen`)") && Contains(in.string()) &&
@@ -154,7 +127,7 @@ TEST_CASE("cli bad input: a self-intersecting surface is stopped at node `tets`"
 }
 
 TEST_CASE("cli bad input: bad tet meshes exit 1 naming node and file", "[cli][badinput]") {
-  Dir d("tets");
+  TempDir d("badinput_tets");
   write(d / "tets.json", R"({"nodes":[{"id":"tets","type":"read_tetmesh","params":{"path":"${input}"}},
       {"id":"write","type":"write_tetmesh","params":{"path":"out.vtk"},"inputs":{"mesh":"tets"}}]})");
   const std::string head = "MeshVersionFormatted 2\nDimension 3\nVertices\n5\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\n";
@@ -177,7 +150,7 @@ TEST_CASE("cli bad input: bad tet meshes exit 1 naming node and file", "[cli][ba
 }
 
 TEST_CASE("cli bad input: config errors exit 2", "[cli][badinput]") {
-  Dir d("config");
+  TempDir d("badinput_config");
   struct Case {
     std::string args, message;
   };
@@ -192,7 +165,7 @@ TEST_CASE("cli bad input: config errors exit 2", "[cli][badinput]") {
   };
   for (const auto& c : cases) {
     SECTION(c.message) {
-      Run r = run_cli("run " + c.args + " --out " + (d / "out").string() + " --no-cache");
+      CliRun r = run_cli("run " + c.args + " --out " + (d / "out").string() + " --no-cache");
       INFO(r.err);
       CHECK(r.code == 2);
       CHECK_THAT(r.err, Contains(c.message));
@@ -202,8 +175,8 @@ TEST_CASE("cli bad input: config errors exit 2", "[cli][badinput]") {
 }
 
 TEST_CASE("cli bad input: a request far beyond the machine is refused up front", "[cli][badinput]") {
-  Dir d("limit");
-  Run r = run_cli("run " + config("default.json") + " --set tets.edge_length=0.002 --out " + (d / "out").string() +
+  TempDir d("badinput_limit");
+  CliRun r = run_cli("run " + config("default.json") + " --set tets.edge_length=0.002 --out " + (d / "out").string() +
                   " --no-cache");
   INFO(r.err);
   CHECK(r.code == 1);
@@ -214,11 +187,11 @@ TEST_CASE("cli bad input: a request far beyond the machine is refused up front",
 }
 
 TEST_CASE("cli output faults: full disk, output folder is a file, output file is a folder", "[cli][badinput]") {
-  Dir d("output");
+  TempDir d("badinput_output");
   const std::string base = "run " + config("baseline.json") + " --set tets.edge_length=0.1 --no-cache --out ";
   SECTION("disk full (file size limit, SIGXFSZ ignored): exit 1, no mesh, no temporary file") {
     const fs::path out = d / "full";
-    Run r = run_cli(base + out.string(), "trap \"\" XFSZ; ulimit -f 64; ");
+    CliRun r = run_cli(base + out.string(), "trap \"\" XFSZ; ulimit -f 64; ");
     INFO(r.err);
     CHECK(r.code == 1);
     CHECK_THAT(r.err, Contains("node `write`") && Contains("hex.vtk: write failed: File too large"));
@@ -226,7 +199,7 @@ TEST_CASE("cli output faults: full disk, output folder is a file, output file is
   }
   SECTION("the output folder is a file") {
     const fs::path out = write(d / "a_file", "keep me\n");
-    Run r = run_cli(base + out.string());
+    CliRun r = run_cli(base + out.string());
     INFO(r.err);
     CHECK(r.code == 1);
     CHECK_THAT(r.err, Contains("a_file"));
@@ -238,7 +211,7 @@ TEST_CASE("cli output faults: full disk, output folder is a file, output file is
   SECTION("the output file name is taken by a folder") {
     const fs::path out = d / "clash";
     fs::create_directories(out / "hex.vtk");
-    Run r = run_cli(base + out.string());
+    CliRun r = run_cli(base + out.string());
     INFO(r.err);
     CHECK(r.code == 1);
     CHECK_THAT(r.err, Contains("node `write`") && Contains("hex.vtk: cannot write the file: a folder of that name exists"));
@@ -248,7 +221,7 @@ TEST_CASE("cli output faults: full disk, output folder is a file, output file is
 }
 
 TEST_CASE("cli scale: 1e-9 and 1e9 scaled models mesh like the unit model", "[cli][badinput]") {
-  Dir d("scale");
+  TempDir d("badinput_scale");
   const polyhex::SurfaceMesh unit = polyhex::make_shape({"l_block", 24});
   const std::string args = " --set tets.edge_length=0.06 --set segment.hex_edge_length=0.05"
                            " --set polycube.edge_length=0.05 --threads 2 --no-cache";
@@ -256,7 +229,7 @@ TEST_CASE("cli scale: 1e-9 and 1e9 scaled models mesh like the unit model", "[cl
     polyhex::SurfaceMesh m = unit;
     m.V *= k;
     polyhex::write_surface(m, d / (name + ".obj"));
-    Run r = run_cli("run " + config("default.json") + " --input " + (d / (name + ".obj")).string() + " --out " +
+    CliRun r = run_cli("run " + config("default.json") + " --input " + (d / (name + ".obj")).string() + " --out " +
                     (d / name).string() + args);
     INFO(name << ": " << r.err);
     REQUIRE(r.code == 0);

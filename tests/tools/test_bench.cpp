@@ -4,40 +4,27 @@
 
 #include <unistd.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
+
+#include "tests/helpers/cli.h"
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
 using json = nlohmann::json;
+using polyhex::test::CliRun;
+using polyhex::test::run_polyhex_to_files;
 
 namespace {
 
-struct BenchRun {
-  int code = -1;
-  std::string out, err;
-};
-
 // Runs `polyhex bench ARGS` in a fresh folder `dir`; stdout and stderr go to files there.
-BenchRun bench(const std::string& args, const fs::path& dir) {
+CliRun bench(const std::string& args, const fs::path& dir) {
   fs::remove_all(dir);
   fs::create_directories(dir);
-  const std::string cmd = std::string(POLYHEX_BINARY) + " bench " + args + " --out '" + (dir / "runs").string() +
-                          "' > '" + (dir / "out.txt").string() + "' 2> '" + (dir / "err.txt").string() + "'";
-  const int status = std::system(cmd.c_str());
-  BenchRun r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  for (auto [file, text] : {std::pair{"out.txt", &r.out}, std::pair{"err.txt", &r.err}}) {
-    std::ifstream in(dir / file);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    *text = ss.str();
-  }
-  return r;
+  return run_polyhex_to_files("bench " + args + " --out '" + (dir / "runs").string() + "'", dir / "out.txt",
+                              dir / "err.txt");
 }
 
 fs::path bench_dir(const std::string& name) {
@@ -60,7 +47,7 @@ void check_stats(const json& s, size_t n) {
 TEST_CASE("bench: the throughput config, coarse: JSON schema, units, solver figures", "[bench]") {
   const fs::path dir = bench_dir("schema");
   const std::string config = std::string(POLYHEX_SOURCE_DIR) + "/configs/bench/throughput_200k.json";
-  BenchRun r = bench(config +
+  CliRun r = bench(config +
                          " --set surface.resolution=24 --set tets.edge_length=0.08 --set segment.hex_edge_length=0.06"
                          " --set polycube.edge_length=0.06 --set quality.samples=5000 --threads 2 --repeat 3 --warmup 1"
                          " --json " + (dir / "bench.json").string(),
@@ -125,7 +112,7 @@ TEST_CASE("bench: --json - puts the JSON on stdout; a failing run exits 1 naming
   const fs::path dir = bench_dir("stdout");
   const std::string baseline = std::string(POLYHEX_SOURCE_DIR) + "/configs/baseline.json";
   const std::string cube = std::string(POLYHEX_SOURCE_DIR) + "/tests/fixtures/io/cube.off";
-  BenchRun r = bench(baseline + " --input " + cube + " --set tets.edge_length=0.2 --set quality.samples=1000"
+  CliRun r = bench(baseline + " --input " + cube + " --set tets.edge_length=0.2 --set quality.samples=1000"
                                 " --threads 1 --repeat 2 --warmup 0 --json -",
                      dir);
   INFO(r.err);
@@ -137,7 +124,7 @@ TEST_CASE("bench: --json - puts the JSON on stdout; a failing run exits 1 naming
   CHECK_THAT(r.err, Contains("median s"));  // the table went to stderr
   CHECK_FALSE(b["nodes"][2].contains("solver"));
 
-  BenchRun bad = bench(baseline + " --set surface.path=/nonexistent/part.off --repeat 2 --json " +
+  CliRun bad = bench(baseline + " --set surface.path=/nonexistent/part.off --repeat 2 --json " +
                            (dir / "bench.json").string(),
                        bench_dir("failing"));
   CHECK(bad.code == 1);

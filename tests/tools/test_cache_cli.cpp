@@ -2,49 +2,22 @@
 // processes on one cache, and `polyhex cache stats|clear|prune`.
 #include <catch2/catch.hpp>
 
-#include <unistd.h>
-
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "tests/helpers/cli.h"
+
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
 using json = nlohmann::json;
+using polyhex::test::CliRun;
+using polyhex::test::finish_command;
+using polyhex::test::run_polyhex;
+using polyhex::test::start_polyhex;
 
 namespace {
-
-struct Result {
-  int code;
-  std::string output;  // stdout and stderr together
-};
-
-FILE* start(const std::string& args) {
-  std::string cmd = std::string(POLYHEX_BINARY) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  REQUIRE(p);
-  return p;
-}
-Result finish(FILE* p) {
-  Result r{-1, {}};
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
-  int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-Result run(const std::string& args) { return finish(start(args)); }
-
-fs::path temp_dir(const std::string& name) {
-  auto d = fs::temp_directory_path() / ("polyhex_cache_cli_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
 
 // A small baseline pipeline on a built-in box: shapes -> TetGen -> split -> VTK.
 fs::path write_config(const fs::path& dir) {
@@ -62,35 +35,30 @@ json report(const fs::path& out) {
   return json::parse(in);
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
 json stats(const fs::path& cache) {
-  Result r = run("cache stats --json --cache " + cache.string());
-  INFO(r.output);
+  CliRun r = run_polyhex("cache stats --json --cache " + cache.string());
+  INFO(r.out);
   REQUIRE(r.code == 0);
-  return json::parse(r.output);
+  return json::parse(r.out);
 }
 
 }  // namespace
 
 TEST_CASE("cache cli: two concurrent runs on one cache both succeed with identical outputs", "[cache]") {
-  fs::path dir = temp_dir("concurrent");
+  fs::path dir = polyhex::test::fresh_dir("cache_cli_concurrent");
   const fs::path cfg = write_config(dir);
   const fs::path cache = dir / "shared-cache";
   const std::string common = "run " + cfg.string() + " --threads 1 --cache " + cache.string() + " --out ";
-  FILE* a = start(common + (dir / "a").string());
-  FILE* b = start(common + (dir / "b").string());
-  Result ra = finish(a), rb = finish(b);
-  INFO(ra.output);
-  INFO(rb.output);
+  FILE* a = start_polyhex(common + (dir / "a").string());
+  FILE* b = start_polyhex(common + (dir / "b").string());
+  CliRun ra = finish_command(a), rb = finish_command(b);
+  INFO(ra.out);
+  INFO(rb.out);
   REQUIRE(ra.code == 0);
   REQUIRE(rb.code == 0);
-  const std::string mesh = slurp(dir / "a" / "hex.vtk");
+  const std::string mesh = polyhex::test::read_text(dir / "a" / "hex.vtk");
   CHECK(mesh.size() > 1000);
-  CHECK(slurp(dir / "b" / "hex.vtk") == mesh);
+  CHECK(polyhex::test::read_text(dir / "b" / "hex.vtk") == mesh);
   json ja = report(dir / "a"), jb = report(dir / "b");
   for (auto id : {"surface", "tets", "hex"}) {
     INFO(id);
@@ -109,66 +77,66 @@ TEST_CASE("cache cli: two concurrent runs on one cache both succeed with identic
   CHECK(s["by_type"]["tetrahedralize/tetgen"]["entries"] == 1);
 
   // a third run loads all three and writes the same mesh
-  Result rc = run("-v " + common + (dir / "c").string());
+  CliRun rc = run_polyhex("-v " + common + (dir / "c").string());
   REQUIRE(rc.code == 0);
-  CHECK_THAT(rc.output, Contains("loaded from cache"));
+  CHECK_THAT(rc.out, Contains("loaded from cache"));
   json jc = report(dir / "c");
   for (auto id : {"surface", "tets", "hex"}) CHECK(jc["nodes"][id]["cache_hit"] == true);
   CHECK(jc["nodes"]["write"]["cache_hit"] == false);
   CHECK(jc["nodes"]["tets"]["metrics"]["tets"] == ja["nodes"]["tets"]["metrics"]["tets"]);
-  CHECK(slurp(dir / "c" / "hex.vtk") == mesh);
+  CHECK(polyhex::test::read_text(dir / "c" / "hex.vtk") == mesh);
   fs::remove_all(dir);
 }
 
 TEST_CASE("cache cli: default folder beside the output, --no-cache, and stats/prune/clear", "[cache]") {
-  fs::path dir = temp_dir("commands");
+  fs::path dir = polyhex::test::fresh_dir("cache_cli_commands");
   const fs::path cfg = write_config(dir);
   const fs::path cache = dir / ".polyhex-cache";
 
-  Result off = run("run " + cfg.string() + " --no-cache --out " + (dir / "off").string());
+  CliRun off = run_polyhex("run " + cfg.string() + " --no-cache --out " + (dir / "off").string());
   REQUIRE(off.code == 0);
   CHECK_FALSE(fs::exists(cache));
   CHECK(report(dir / "off")["nodes"]["tets"]["cache_hit"] == false);
 
-  Result both = run("run " + cfg.string() + " --no-cache --cache " + cache.string() + " --out " + (dir / "x").string());
+  CliRun both = run_polyhex("run " + cfg.string() + " --no-cache --cache " + cache.string() + " --out " + (dir / "x").string());
   CHECK(both.code == 2);
-  CHECK_THAT(both.output, Contains("--no-cache") && Contains("--cache"));
+  CHECK_THAT(both.out, Contains("--no-cache") && Contains("--cache"));
 
-  REQUIRE(run("run " + cfg.string() + " --out " + (dir / "runs" / "one").string()).code == 0);
+  REQUIRE(run_polyhex("run " + cfg.string() + " --out " + (dir / "runs" / "one").string()).code == 0);
   CHECK_FALSE(fs::exists(cache));  // beside the output folder: dir/runs/.polyhex-cache
   const fs::path beside = dir / "runs" / ".polyhex-cache";
   json s = stats(beside);
   REQUIRE(s["entries"] == 3);
   CHECK(s["bytes"].get<double>() > 1000);
   CHECK(s["dir"] == beside.string());
-  Result second = run("run " + cfg.string() + " --out " + (dir / "runs" / "two").string());
+  CliRun second = run_polyhex("run " + cfg.string() + " --out " + (dir / "runs" / "two").string());
   REQUIRE(second.code == 0);
   CHECK(report(dir / "runs" / "two")["nodes"]["hex"]["cache_hit"] == true);
 
-  Result text = run("cache stats --cache " + beside.string());
+  CliRun text = run_polyhex("cache stats --cache " + beside.string());
   CHECK(text.code == 0);
-  CHECK_THAT(text.output, Contains("3 entries") && Contains("hex_from_tets/split"));
+  CHECK_THAT(text.out, Contains("3 entries") && Contains("hex_from_tets/split"));
 
-  Result bad = run("cache prune --max-size lots --cache " + beside.string());
+  CliRun bad = run_polyhex("cache prune --max-size lots --cache " + beside.string());
   CHECK(bad.code == 2);
-  CHECK_THAT(bad.output, Contains("size `lots`"));
-  CHECK(run("cache prune --cache " + beside.string()).code == 2);  // --max-size is required
+  CHECK_THAT(bad.out, Contains("size `lots`"));
+  CHECK(run_polyhex("cache prune --cache " + beside.string()).code == 2);  // --max-size is required
 
   // prune to the size of all entries but the biggest (the hexes, the least recently used tie is broken by name)
   const auto total = s["bytes"].get<std::uintmax_t>();
-  Result keep_all = run("cache prune --max-size " + std::to_string(total) + " --cache " + beside.string());
+  CliRun keep_all = run_polyhex("cache prune --max-size " + std::to_string(total) + " --cache " + beside.string());
   CHECK(keep_all.code == 0);
-  CHECK_THAT(keep_all.output, Contains("removed 0 least recently used entries"));
+  CHECK_THAT(keep_all.out, Contains("removed 0 least recently used entries"));
   CHECK(stats(beside)["entries"] == 3);
-  Result prune = run("cache prune --max-size 1K --cache " + beside.string());
+  CliRun prune = run_polyhex("cache prune --max-size 1K --cache " + beside.string());
   CHECK(prune.code == 0);
   CHECK(stats(beside)["bytes"].get<double>() <= 1024);
 
-  REQUIRE(run("run " + cfg.string() + " --out " + (dir / "runs" / "three").string()).code == 0);
+  REQUIRE(run_polyhex("run " + cfg.string() + " --out " + (dir / "runs" / "three").string()).code == 0);
   CHECK(stats(beside)["entries"] == 3);
-  Result clear = run("cache clear --cache " + beside.string());
+  CliRun clear = run_polyhex("cache clear --cache " + beside.string());
   CHECK(clear.code == 0);
-  CHECK_THAT(clear.output, Contains("removed 3 entries"));
+  CHECK_THAT(clear.out, Contains("removed 3 entries"));
   CHECK(stats(beside)["entries"] == 0);
   fs::remove_all(dir);
 }

@@ -6,45 +6,22 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "runtime/factorization.h"
+#include "tests/helpers/cli.h"
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
+using polyhex::test::CliRun;
+using polyhex::test::read_text;
+using polyhex::test::run_command;
 
 namespace {
-
-struct Result {
-  int code;
-  std::string output;
-};
-
-Result shell(const std::string& cmd) {
-  Result r{-1, {}};
-  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
-  REQUIRE(p);
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
-  const int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 /// Wall-clock figures, which legitimately differ between runs.
 bool timing_key(const std::string& k) {
@@ -70,13 +47,11 @@ std::vector<std::string> metric_differences(const json& a, const json& b) {
 
 TEST_CASE("determinism: default config, 1 / 2 / 8 threads and a repeated run give identical bytes and figures",
           "[robust][cli]") {
-  const fs::path root = fs::temp_directory_path() / ("polyhex_robust_det_" + std::to_string(::getpid()));
-  fs::remove_all(root);
-  fs::create_directories(root);
+  const fs::path root = polyhex::test::fresh_dir("robust_det");
   const std::string bin = POLYHEX_BINARY;
   // a coarse built-in shape with curved and sharp features, so every stage has work to do
-  Result s = shell(bin + " shapes fandisk_like --resolution 16 --out " + (root / "fandisk.obj").string());
-  INFO(s.output);
+  CliRun s = run_command(bin + " shapes fandisk_like --resolution 16 --out " + (root / "fandisk.obj").string() + " 2>&1");
+  INFO(s.out);
   REQUIRE(s.code == 0);
 
   struct Run {
@@ -90,12 +65,12 @@ TEST_CASE("determinism: default config, 1 / 2 / 8 threads and a repeated run giv
     // and no run can find another's artefact cache
     const fs::path dir = root / ("run" + std::to_string(runs.size()));
     fs::create_directories(dir);
-    Result r = shell("cd " + dir.string() + " && " + bin + " run " + POLYHEX_SOURCE_DIR + "/configs/default.json" +
+    CliRun r = run_command("cd " + dir.string() + " && " + bin + " run " + POLYHEX_SOURCE_DIR + "/configs/default.json" +
                      " --input ../fandisk.obj --out out --threads " + std::to_string(threads) +
-                     " --set tets.edge_length=0.06 --set segment.hex_edge_length=0.06 --set polycube.edge_length=0.06");
-    INFO("threads " << threads << ": " << r.output);
+                     " --set tets.edge_length=0.06 --set segment.hex_edge_length=0.06 --set polycube.edge_length=0.06 2>&1");
+    INFO("threads " << threads << ": " << r.out);
     REQUIRE(r.code == 0);
-    runs.push_back({threads, slurp(dir / "out" / "hex.vtk"), json::parse(slurp(dir / "out" / "report.json"))});
+    runs.push_back({threads, read_text(dir / "out" / "hex.vtk"), json::parse(read_text(dir / "out" / "report.json"))});
   }
   const Run& ref = runs.front();
   REQUIRE(ref.mesh.size() > 10000);

@@ -12,32 +12,20 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
+
+#include "tests/helpers/cli.h"
 
 extern char** environ;
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
 using Clock = std::chrono::steady_clock;
+using polyhex::test::read_text;
 
 namespace {
-
-fs::path temp_dir(const std::string& name) {
-  auto d = fs::temp_directory_path() / ("polyhex_robust_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 /// Starts the polyhex binary with `args`, stdout and stderr into `log`. \return the pid
 pid_t spawn(const std::vector<std::string>& args, const fs::path& log) {
@@ -90,7 +78,7 @@ std::vector<std::string> temp_files(const fs::path& dir) {
 /// `marker` (a --save-all file of an earlier node) exists, so the signal lands in the node after it,
 /// sends `sig`, and checks the outcome.
 void interrupt_run(int sig, const std::string& marker, const std::string& signame) {
-  fs::path dir = temp_dir(signame);
+  fs::path dir = polyhex::test::fresh_dir("robust_" + signame);
   fs::path out = dir / "out", log = dir / "log.txt", surface = dir / "fandisk.obj";
   {
     pid_t p = spawn({"shapes", "fandisk_like", "--resolution", "16", "--out", surface.string()}, dir / "shapes.txt");
@@ -112,7 +100,7 @@ void interrupt_run(int sig, const std::string& marker, const std::string& signam
     if (std::chrono::duration<double>(Clock::now() - t0).count() > 120) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  INFO(slurp(log));
+  INFO(read_text(log));
   REQUIRE_FALSE(exited_early);
   REQUIRE(fs::exists(out / marker));
   std::this_thread::sleep_for(std::chrono::milliseconds(300));  // well inside the next node
@@ -120,7 +108,7 @@ void interrupt_run(int sig, const std::string& marker, const std::string& signam
   REQUIRE(::kill(pid, sig) == 0);
   const int status = wait_for(pid, 30);
   const double stop_seconds = std::chrono::duration<double>(Clock::now() - t_sig).count();
-  const std::string output = slurp(log);
+  const std::string output = read_text(log);
   INFO(output);
   INFO("stopped " << stop_seconds << " s after the signal");
   REQUIRE(status != -1);
@@ -130,7 +118,7 @@ void interrupt_run(int sig, const std::string& marker, const std::string& signam
   CHECK_THAT(output, Contains("interrupted") && Contains("interrupted by " + signame));
   CHECK_FALSE(fs::exists(out / "hex.vtk"));
   CHECK(temp_files(dir).empty());
-  const nlohmann::json rep = nlohmann::json::parse(slurp(out / "report.json"));
+  const nlohmann::json rep = nlohmann::json::parse(read_text(out / "report.json"));
   CHECK(rep["status"] == "interrupted");
   CHECK_THAT(rep["error"].get<std::string>(), Contains("interrupted by " + signame));
   CHECK(rep["nodes"]["write"]["ran"] == false);

@@ -8,51 +8,30 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <thread>
 #include <string>
 #include <vector>
 
+#include "tests/helpers/cli.h"
+
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
 using json = nlohmann::json;
+using polyhex::test::CliRun;
+using polyhex::test::read_text;
+using polyhex::test::run_polyhex_to_files;
 
 namespace {
 
-struct Run {
-  int code = -1;
-  std::string out, err;  // stdout, stderr
-};
-
-fs::path scratch(const std::string& name) {
-  fs::path d = fs::temp_directory_path() / ("polyhex_sweep_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 // Runs `polyhex sweep ARGS` with stdout and stderr captured in files of `dir`.
-Run sweep(const std::string& args, const fs::path& dir) {
-  const fs::path o = dir / "stdout.txt", e = dir / "stderr.txt";
-  const std::string cmd = std::string(POLYHEX_BINARY) + " sweep " + args + " > '" + o.string() + "' 2> '" + e.string() + "'";
-  const int status = std::system(cmd.c_str());
-  Run r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(o);
-  r.err = slurp(e);
-  return r;
+CliRun sweep(const std::string& args, const fs::path& dir) {
+  return run_polyhex_to_files("sweep " + args, dir / "stdout.txt", dir / "stderr.txt");
 }
+
+fs::path scratch(const std::string& name) { return polyhex::test::fresh_dir("sweep_" + name); }
 
 std::string config(const std::string& name) { return std::string(POLYHEX_SOURCE_DIR) + "/configs/sweeps/" + name; }
 
@@ -108,7 +87,7 @@ fs::path baseline_sweep(const fs::path& dir, const json& sweep_value) {
 
 TEST_CASE("sweep: axes expand to their cartesian product, last axis fastest", "[sweep]") {
   const fs::path dir = scratch("axes");
-  Run r = sweep(config("rotation.json") + " --list", dir);
+  CliRun r = sweep(config("rotation.json") + " --list", dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
   const json j = json::parse(r.out);
@@ -127,14 +106,14 @@ TEST_CASE("sweep: axes expand to their cartesian product, last axis fastest", "[
   // With the cache every later case shares the tets with the first and waits for it; without, none waits.
   CHECK(cases[0]["depends_on"].is_null());
   for (size_t c = 1; c < 6; ++c) CHECK(cases[c]["depends_on"] == cases[0]["name"]);
-  Run nc = sweep(config("rotation.json") + " --list --no-cache", dir);
+  CliRun nc = sweep(config("rotation.json") + " --list --no-cache", dir);
   REQUIRE(nc.code == 0);
   for (const json& c : json::parse(nc.out)["cases"]) CHECK(c["depends_on"].is_null());
 }
 
 TEST_CASE("sweep: a linked axis sets both params; named cases keep their order and sets", "[sweep]") {
   const fs::path dir = scratch("named");
-  Run r = sweep(config("edge_length.json") + " --list", dir);
+  CliRun r = sweep(config("edge_length.json") + " --list", dir);
   REQUIRE(r.code == 0);
   json cases = json::parse(r.out)["cases"];
   REQUIRE(cases.size() == 3);
@@ -143,7 +122,7 @@ TEST_CASE("sweep: a linked axis sets both params; named cases keep their order a
     CHECK(cases[c]["set"]["polycube.edge_length"].get<double>() == h[c]);
     CHECK(cases[c]["set"]["segment.hex_edge_length"].get<double>() == h[c]);
   }
-  Run n = sweep(config("rotation_cases.json") + " --list", dir);
+  CliRun n = sweep(config("rotation_cases.json") + " --list", dir);
   REQUIRE(n.code == 0);
   cases = json::parse(n.out)["cases"];
   REQUIRE(cases.size() == 4);
@@ -181,7 +160,7 @@ TEST_CASE("sweep: invalid sweeps are config errors naming the path (exit 2, noth
   };
   for (size_t k = 0; k < bad.size(); ++k) {
     const fs::path cfg = baseline_sweep(dir, bad[k].sweep);
-    Run r = sweep(cfg.string() + " --out " + (dir / "out").string(), dir);
+    CliRun r = sweep(cfg.string() + " --out " + (dir / "out").string(), dir);
     INFO(k << ": " << bad[k].sweep.dump() << "\n" << r.err);
     CHECK(r.code == 2);
     CHECK_THAT(r.err, Contains(cfg.string() + ": " + bad[k].message));
@@ -189,17 +168,17 @@ TEST_CASE("sweep: invalid sweeps are config errors naming the path (exit 2, noth
   }
   // --set may not pin a swept param; a config without `sweep` is not a sweep.
   const fs::path cfg = baseline_sweep(dir, {{"tets.edge_length", {0.1, 0.2}}});
-  Run s = sweep(cfg.string() + " --set tets.edge_length=0.3 --list", dir);
+  CliRun s = sweep(cfg.string() + " --set tets.edge_length=0.3 --list", dir);
   CHECK(s.code == 2);
   CHECK_THAT(s.err, Contains("--set tets.edge_length=0.3: `tets.edge_length` is swept by " + cfg.string()));
-  Run none = sweep(std::string(POLYHEX_SOURCE_DIR) + "/configs/baseline.json --list", dir);
+  CliRun none = sweep(std::string(POLYHEX_SOURCE_DIR) + "/configs/baseline.json --list", dir);
   CHECK(none.code == 2);
   CHECK_THAT(none.err, Contains("baseline.json: no `sweep` key"));
 }
 
 TEST_CASE("sweep: the edge-length sweep writes sweep.csv, sweep.json and one folder per case", "[sweep]") {
   const fs::path dir = scratch("edge"), out = dir / "out";
-  Run r = sweep(config("edge_length.json") + " --out " + out.string() + " --jobs 2" + kCoarse, dir);
+  CliRun r = sweep(config("edge_length.json") + " --out " + out.string() + " --jobs 2" + kCoarse, dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
   const std::vector<std::string> names = {"polycube.edge_length+segment.hex_edge_length=0.06",
@@ -235,7 +214,7 @@ TEST_CASE("sweep: the edge-length sweep writes sweep.csv, sweep.json and one fol
   CHECK(hexes(2) > hexes(1));
 
   // JSON: schema, cases with values, quality and per-node figures matching each case's report.json.
-  const json s = json::parse(slurp(out / "sweep.json"));
+  const json s = json::parse(read_text(out / "sweep.json"));
   CHECK(s["schema"] == 1);
   CHECK(s["status"] == "ok");
   CHECK(s["failed"] == 0);
@@ -253,7 +232,7 @@ TEST_CASE("sweep: the edge-length sweep writes sweep.csv, sweep.json and one fol
     const fs::path folder = out / names[c];
     REQUIRE(fs::exists(folder / "report.json"));
     CHECK(fs::exists(folder / "hex.vtk"));
-    const json rep = json::parse(slurp(folder / "report.json"));
+    const json rep = json::parse(read_text(folder / "report.json"));
     CHECK(rep["status"] == "ok");
     CHECK(row["quality"]["hexes"] == rep["nodes"]["quality"]["metrics"]["hexes"]);
     CHECK(row["quality"]["sj_min"] == rep["nodes"]["quality"]["metrics"]["sj_min"]);
@@ -267,7 +246,7 @@ TEST_CASE("sweep: the edge-length sweep writes sweep.csv, sweep.json and one fol
     if (c == 0)
       for (auto& id : ids) CHECK(row["nodes"][id]["cache_hit"] == false);
     // config.json is the resolved case: `polyhex run` on it repeats the case.
-    const json cfg = json::parse(slurp(folder / "config.json"));
+    const json cfg = json::parse(read_text(folder / "config.json"));
     CHECK_FALSE(cfg.contains("sweep"));
     for (const json& n : cfg["nodes"])
       if (n["id"] == "polycube") CHECK(n["params"]["edge_length"] == row["set"]["polycube.edge_length"]);
@@ -278,21 +257,21 @@ TEST_CASE("sweep: the edge-length sweep writes sweep.csv, sweep.json and one fol
 
 TEST_CASE("sweep: the anchor-weight x feature-angle sweep runs every case", "[sweep]") {
   const fs::path dir = scratch("rotation"), out = dir / "out";
-  Run r = sweep(config("rotation.json") + " --out " + out.string() + " --jobs 2" + kCoarse +
+  CliRun r = sweep(config("rotation.json") + " --out " + out.string() + " --jobs 2" + kCoarse +
                     " --set segment.hex_edge_length=0.06 --set polycube.edge_length=0.06",
                 dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
-  const json s = json::parse(slurp(out / "sweep.json"));
+  const json s = json::parse(read_text(out / "sweep.json"));
   REQUIRE(s["cases"].size() == 6);
   for (const json& row : s["cases"]) {
     INFO(row["name"]);
     CHECK(row["status"] == "ok");
     CHECK(row["quality"]["hexes"].get<int>() > 100);
     CHECK(row["values"]["rotate.anchor_weight"] == row["set"]["rotate.anchor_weight"]);
-    const json rep = json::parse(slurp(out / row["name"].get<std::string>() / "report.json"));
+    const json rep = json::parse(read_text(out / row["name"].get<std::string>() / "report.json"));
     // the swept values reached the node (its canonical params are not in the report; its config is)
-    const json cfg = json::parse(slurp(out / row["name"].get<std::string>() / "config.json"));
+    const json cfg = json::parse(read_text(out / row["name"].get<std::string>() / "config.json"));
     for (const json& n : cfg["nodes"])
       if (n["id"] == "rotate") {
         CHECK(n["params"]["anchor_weight"] == row["set"]["rotate.anchor_weight"]);
@@ -312,10 +291,10 @@ TEST_CASE("sweep: a failing case is reported, the others still run, the exit cod
   // A report left by an earlier sweep in the failing case's folder must not pass for this run's.
   fs::create_directories(out / "missing");
   std::ofstream(out / "missing" / "report.json") << R"({"status": "ok", "nodes": {}})";
-  Run r = sweep(cfg.string() + " --out " + out.string() + " --jobs 2 --threads 2", dir);
+  CliRun r = sweep(cfg.string() + " --out " + out.string() + " --jobs 2 --threads 2", dir);
   INFO(r.err);
   CHECK(r.code == 1);
-  const json s = json::parse(slurp(out / "sweep.json"));
+  const json s = json::parse(read_text(out / "sweep.json"));
   CHECK(s["status"] == "failed");
   CHECK(s["failed"] == 1);
   REQUIRE(s["cases"].size() == 3);
@@ -333,7 +312,7 @@ TEST_CASE("sweep: a failing case is reported, the others still run, the exit cod
   CHECK(bad["quality"].is_null());
   CHECK(bad["nodes"]["surface"]["ran"] == false);
   CHECK(bad["nodes"]["tets"]["ran"] == false);
-  const json rep = json::parse(slurp(out / "missing" / "report.json"));
+  const json rep = json::parse(read_text(out / "missing" / "report.json"));
   CHECK(rep["status"] == "error");
   auto rows = read_csv(out / "sweep.csv");
   REQUIRE(rows.size() == 4);
@@ -365,11 +344,11 @@ TEST_CASE("sweep: SIGTERM stops the running cases at a safe point, starts no mor
   ::kill(pid, SIGTERM);
   int status = 0;
   REQUIRE(::waitpid(pid, &status, 0) == pid);
-  const std::string err = slurp(dir / "stderr.txt");
+  const std::string err = read_text(dir / "stderr.txt");
   INFO(err);
   REQUIRE(WIFEXITED(status));
   CHECK(WEXITSTATUS(status) == 130);
-  const json s = json::parse(slurp(out / "sweep.json"));
+  const json s = json::parse(read_text(out / "sweep.json"));
   CHECK(s["status"] == "interrupted");
   REQUIRE(s["cases"].size() == 6);
   CHECK(s["cases"][0]["status"] == "interrupted");

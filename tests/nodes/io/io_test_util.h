@@ -1,16 +1,14 @@
 // Helpers of the mesh I/O tests: temporary folders, fixture paths, independent mesh checks.
 #pragma once
 
-#include <atomic>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <string>
 #include <utility>
 
-#include <unistd.h>
-
 #include "nodes/artefacts/meshes.h"
+#include "tests/helpers/cli.h"
 
 namespace polyhex::iotest {
 
@@ -18,20 +16,10 @@ inline std::filesystem::path fixture(const std::string& name) {
   return std::filesystem::path(POLYHEX_SOURCE_DIR) / "tests" / "fixtures" / "io" / name;
 }
 
-/// A fresh folder under the system temp dir, removed with its content at the end of the scope.
-struct TempDir {
-  std::filesystem::path path;
-  TempDir() {
-    static std::atomic<int> n{0};
-    path = std::filesystem::temp_directory_path() /
-           ("polyhex_io_test_" + std::to_string(::getpid()) + "_" + std::to_string(n++));
-    std::filesystem::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path, ec);
-  }
-  std::filesystem::path operator/(const std::string& name) const { return path / name; }
+/// A fresh folder under the system temp dir (polyhex_io_test_PID_N), removed with its content at the end
+/// of the scope: the shared one of tests/helpers/cli.h.
+struct TempDir : polyhex::test::TempDir {
+  TempDir() : polyhex::test::TempDir("io_test") {}
 };
 
 /// Writes `content` verbatim (binary) and returns the path.
