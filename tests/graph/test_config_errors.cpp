@@ -71,7 +71,7 @@ TEST_CASE("config errors on the real nodes name the node, the param and the vali
   }
 }
 
-TEST_CASE("--set overrides with bad values and malformed config files", "[graph][badinput]") {
+TEST_CASE("config: --set overrides with bad values and malformed config files", "[graph][badinput]") {
   const auto dir = std::filesystem::temp_directory_path() / ("polyhex_cfgerr_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   json j = json::parse(surface_and_tets(R"({"edge_length":0.05})"));
