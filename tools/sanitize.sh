@@ -27,7 +27,7 @@ set +e
 # allocator_may_return_null: an allocation beyond the machine (tests/fixtures/fuzz) throws std::bad_alloc
 # as in a normal build instead of aborting the run. UBSan reports do not stop the run (halt_on_error=0).
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:allocator_may_return_null=1:detect_stack_use_after_return=1 \
-UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=0 \
+UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=0:suppressions=$PWD/tools/ubsan.supp \
   "$BUILD_DIR/tests/polyhex_tests" "$SPEC" 2>&1 | tee "$log"
 rc=${PIPESTATUS[0]}
 set -e
