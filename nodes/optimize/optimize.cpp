@@ -1,5 +1,6 @@
 // Hex mesh optimization (paper §6): untangle, max-min scaled Jacobian, shape improvement. See optimize.h.
 #include "nodes/optimize/optimize.h"
+#include "nodes/optimize/hex_corners.h"
 #include "nodes/optimize/untangle_global.h"
 
 #include <tbb/parallel_for.h>
@@ -24,11 +25,8 @@ namespace {
 using Vec3 = Eigen::Vector3d;
 using Clock = std::chrono::steady_clock;
 
-// Corner c and its three edge neighbours, ordered so that the determinant is positive for a valid hex.
-constexpr int kCorner[8][4] = {{0, 1, 3, 4}, {1, 2, 0, 5}, {2, 3, 1, 6}, {3, 0, 2, 7},
-                               {4, 7, 5, 0}, {5, 4, 6, 1}, {6, 5, 7, 2}, {7, 6, 4, 3}};
-
-double chi(double d, double eps) { return 0.5 * (d + std::sqrt(eps * eps + d * d)); }
+using optimize_detail::chi;
+using optimize_detail::kCorner;
 
 /// Normalised corner determinants of a hex (edge vectors over `scale`).
 double min_corner_det(const std::array<Vec3, 8>& p, double scale) {

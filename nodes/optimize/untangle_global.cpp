@@ -1,5 +1,6 @@
 // Global untangling by L-BFGS on the regularised Winslow energy. See untangle_global.h.
 #include "nodes/optimize/untangle_global.h"
+#include "nodes/optimize/hex_corners.h"
 
 #include <tbb/parallel_for.h>
 
@@ -24,8 +25,7 @@ using VecX = Eigen::VectorXd;
 /// (VTK_HEXAHEDRON order); t < 8 the corners (edge vectors ordered for a positive determinant),
 /// t = 8 the centre principal axes (Verdict), each a mean of four parallel edges.
 std::array<Mat83, 9> make_weights() {
-  constexpr int kCorner[8][4] = {{0, 1, 3, 4}, {1, 2, 0, 5}, {2, 3, 1, 6}, {3, 0, 2, 7},
-                                 {4, 7, 5, 0}, {5, 4, 6, 1}, {6, 5, 7, 2}, {7, 6, 4, 3}};
+  using optimize_detail::kCorner;
   std::array<Mat83, 9> W;
   for (int t = 0; t < 8; ++t) {
     W[size_t(t)].setZero();
@@ -53,7 +53,7 @@ const std::array<Mat83, 9>& weights() {
   return W;
 }
 
-double chi(double d, double eps) { return 0.5 * (d + std::sqrt(eps * eps + d * d)); }
+using optimize_detail::chi;
 
 /// |J|² / (3 χ(det J)^{2/3}) and, if dJ, its gradient with respect to J.
 double winslow_term(const Eigen::Matrix3d& J, double eps, Eigen::Matrix3d* dJ) {
