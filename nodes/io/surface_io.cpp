@@ -409,7 +409,8 @@ RawSurface parse_ply(std::string_view data, const std::string& file) {
         }
         double n = values.get(pr.count_type, what + " list count");
         if (ascii && p == 0) line = text.line_no();
-        if (n < 0 || n != std::floor(n)) throw IOError(file + ": " + what + ": bad list count");
+        // (bounded before any int conversion: a forged count like 1e16 is not representable)
+        if (n < 0 || n != std::floor(n) || n > double(INT32_MAX)) throw IOError(file + ": " + what + ": bad list count");
         if (int(p) == list) {
           if (n < 3) throw IOError(file + ": face " + std::to_string(i) + " has " + std::to_string(int(n)) +
                                    " vertices (at least 3 needed)");
