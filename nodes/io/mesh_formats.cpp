@@ -269,6 +269,9 @@ struct VtkValues {
 long long count_field(TextCursor& c, const std::vector<std::string_view>& w, size_t i, const std::string& what) {
   long long n;
   if (w.size() <= i || !io_detail::parse_int(w[i], n) || n < 0) c.fail("expected " + what + " (a count)");
+  // Every counted item takes at least a byte: a larger count is forged (and 3 n could overflow).
+  if (static_cast<unsigned long long>(n) > c.remaining() + 1)
+    c.fail(what + " " + std::to_string(n) + " is more than the " + std::to_string(c.remaining()) + " bytes left in the file");
   return n;
 }
 
