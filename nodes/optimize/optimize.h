@@ -9,10 +9,14 @@
 ///      Σ_corners |J|_F² / (3 χ(det J, ε)^{2/3}), χ(D, ε) = (D + sqrt(ε² + D²)) / 2, J the corner's three
 ///      edge vectors over the local edge length, ε shrinking with the most negative corner determinant;
 ///      finite for inverted corners, so the descent walks out of the fold; the sweeps stop when the
-///      count of inverted hexes stalls for 20 sweeps, then the vertices around the remaining inverted
-///      hexes move all at once by L-BFGS on the same energy (untangle_global.h: a hex folded against the
-///      surface needs several vertices to move together, which one-vertex moves cannot do), kept only if
-///      it lowers the count, then the sweeps again;
+///      count of inverted hexes stalls for 20 sweeps. If hexes are still inverted, the stage first goes on
+///      locally (the boundary release below, then the sweeps again); only if that leaves inverted hexes does
+///      it go back and try the global way: the vertices around the remaining inverted hexes move all at once
+///      by L-BFGS on the same energy (untangle_global.h: a hex folded against the surface needs several
+///      vertices to move together, which one-vertex moves cannot do), then the sweeps and the release; the
+///      way with fewer inverted hexes (then the higher minimum scaled Jacobian) goes on to (b) and (c). The
+///      global descent spreads motion over several rings and can end lower where local moves alone succeed,
+///      hence the order;
 ///  (b) max-min: move each vertex whose incident hexes are below `target_sj` to maximise the minimum
 ///      scaled Jacobian (Verdict, centre term included) of its incident hexes: gradient of a soft minimum,
 ///      backtracking line search, plus the average of its edge neighbours as a candidate;
@@ -52,7 +56,9 @@ struct OptimizeStats {
   int global_outer = 0;                ///< ε updates of the global untangling
   long global_lbfgs_iterations = 0;    ///< its L-BFGS iterations
   long global_free_vertices = 0;       ///< vertices it moved (all runs)
-  long inverted_after_global = -1;     ///< inverted hexes after the first global untangling (-1: not run)
+  long inverted_after_global = -1;     ///< inverted hexes after the global untangling (-1: not run)
+  int optimize_ways = 1;               ///< 2 when the local way left inverted hexes and the global way was tried too
+  bool global_kept = false;            ///< the result is the global way's (fewer inverted hexes or a higher minimum)
   int iterations = 0;                  ///< all sweeps
   long moves = 0;                      ///< accepted vertex moves
   int colours = 0;

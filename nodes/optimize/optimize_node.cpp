@@ -42,6 +42,8 @@ const bool registered = register_node(make_node<P>(
       j["global_lbfgs_iterations"] = s.global_lbfgs_iterations;
       j["inverted_after_global"] = s.inverted_after_global;
       j["global_free_vertices"] = s.global_free_vertices;
+      j["optimize_ways"] = s.optimize_ways;
+      j["global_kept"] = s.global_kept;
       j["untangle_sweeps"] = s.untangle_sweeps;
       j["maxmin_sweeps"] = s.maxmin_sweeps;
       j["shape_sweeps"] = s.shape_sweeps;
@@ -60,7 +62,7 @@ const bool registered = register_node(make_node<P>(
                  std::to_string(s.inverted_before) + " before)");
       if (s.time_budget_hit) ctx.warn("optimization stopped at its time budget of " + std::to_string(p.time_budget) + " s");
       return make_artefact(std::move(out));
-    }).with_version("2"));
+    }).with_version("3"));
 
 }  // namespace
 }  // namespace polyhex

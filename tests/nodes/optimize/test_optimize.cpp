@@ -163,3 +163,39 @@ TEST_CASE("boundary vertices are released from the surface only for hexes still 
   CHECK(st2.released_vertices > 0);
   CHECK(st2.inverted_after > 0);
 }
+
+TEST_CASE("the global untangling is a fallback: tried only when local moves leave inverted hexes, kept only if better",
+          "[optimize]") {
+  HexMesh g = test::grid_hex_mesh(3, 3, 3);
+  g.V.row((1 * 4 + 1) * 4 + 1) << 2.4, 2.3, 2.2;
+  const SurfaceMesh s = test::voxel_surface(test::voxel_box(3, 3, 3));
+  // local sweeps succeed: the global way is not tried, and the result is the local-only result exactly
+  OptimizeStats st, st_local;
+  OptimizeParams local_only;
+  local_only.global_iterations = 0;
+  const HexMesh a = optimize_hexes(g, s, {}, &st);
+  const HexMesh b = optimize_hexes(g, s, local_only, &st_local);
+  CHECK(st.inverted_before > 0);
+  CHECK(st.optimize_ways == 1);
+  CHECK_FALSE(st.global_kept);
+  CHECK(st.inverted_after_global == -1);
+  CHECK(st.inverted_after == 0);
+  CHECK(a.V == b.V);
+  // local sweeps not allowed to untangle: the local way ends inverted, the global way is tried and kept
+  OptimizeParams p;
+  p.untangle_iterations = 0;
+  p.iterations = 0;
+  p.shape_iterations = 0;
+  OptimizeParams q = p;
+  q.global_iterations = 0;
+  OptimizeStats sg, sl;
+  optimize_hexes(g, s, p, &sg);
+  optimize_hexes(g, s, q, &sl);
+  CHECK(sl.inverted_after > 0);
+  CHECK(sl.released_vertices > 0);
+  CHECK(sg.optimize_ways == 2);
+  CHECK(sg.global_kept);
+  CHECK(sg.inverted_after == 0);
+  CHECK(sg.released_vertices == 0);  // the statistics are the kept way's
+  CHECK(sg.sj_min_after > 0);
+}
