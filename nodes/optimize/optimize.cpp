@@ -3,6 +3,7 @@
 #include "nodes/optimize/hex_corners.h"
 #include "nodes/optimize/untangle_global.h"
 
+#include <Eigen/SVD>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -109,6 +110,13 @@ class Optimizer {
       release_and_untangle();
     }
     maxmin();
+    for (int round = 0; round < p_.element_iterations && !out_of_time(); ++round) {
+      ++st_.element_sweeps;
+      const long moved = elements();
+      st_.element_moves += moved;
+      if (moved == 0) break;
+      maxmin();
+    }
     shape();
     HexMesh out;
     out.V = V_;
@@ -417,6 +425,75 @@ class Optimizer {
       });
       if (moved == 0) break;
     }
+  }
+
+  // (b') element moves: the vertices of one poor hex move together towards the cube that best fits it
+  // (least-squares similarity fit, Kabsch): two boundary vertices pressed together, or a hex squeezed
+  // between two others, need several vertices to move at once, which (b) cannot do. Sequential, worst hex
+  // first; a move is kept only if it raises the minimum scaled Jacobian of every hex around the moved
+  // vertices taken together and inverts none.
+  long elements() {
+    std::vector<std::pair<double, int>> poor;
+    for (Eigen::Index h = 0; h < H_.rows(); ++h) {
+      const double s = hex_scaled_jacobian(points(int(h))).sj;
+      if (s < p_.target_sj) poor.emplace_back(s, int(h));
+    }
+    std::sort(poor.begin(), poor.end());
+    static const std::array<Vec3, 8> ref = {Vec3(-.5, -.5, -.5), Vec3(.5, -.5, -.5), Vec3(.5, .5, -.5), Vec3(-.5, .5, -.5),
+                                            Vec3(-.5, -.5, .5),  Vec3(.5, -.5, .5),  Vec3(.5, .5, .5),  Vec3(-.5, .5, .5)};
+    long moved = 0;
+    std::vector<int> region;
+    for (const auto& [s0, h] : poor) {
+      throw_if_interrupted();
+      if (out_of_time()) break;
+      region.clear();
+      for (int k = 0; k < 8; ++k) {
+        const int v = H_(h, k);
+        for (int i = start_[size_t(v)]; i < start_[size_t(v) + 1]; ++i) region.push_back(inc_[size_t(i)]);
+      }
+      std::sort(region.begin(), region.end());
+      region.erase(std::unique(region.begin(), region.end()), region.end());
+      auto region_quality = [&](int& inverted) {
+        double m = 1;
+        inverted = 0;
+        for (int r : region) {
+          const HexSJ q = hex_scaled_jacobian(points(r));
+          m = std::min(m, q.sj);
+          inverted += q.corner_min <= 0;
+        }
+        return m;
+      };
+      int inv0 = 0;
+      const double m0 = region_quality(inv0);
+      const std::array<Vec3, 8> P = points(h);
+      Vec3 t = Vec3::Zero();
+      for (const auto& x : P) t += x;
+      t /= 8.0;
+      Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
+      for (int k = 0; k < 8; ++k) M += (P[size_t(k)] - t) * ref[size_t(k)].transpose();
+      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      Eigen::Vector3d d(1, 1, (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1 : 1);
+      const Eigen::Matrix3d R = svd.matrixU() * d.asDiagonal() * svd.matrixV().transpose();
+      const double scale = svd.singularValues().dot(d) / 6.0;  // sum of |ref|^2 = 8 * 3/4
+      if (!(scale > 0)) continue;
+      for (double lambda : {1.0, 0.5, 0.25}) {
+        for (int k = 0; k < 8; ++k) {
+          const int v = H_(h, k);
+          if (!movable(v)) continue;
+          const Vec3 c = scale * (R * ref[size_t(k)]) + t;
+          V_.row(v) = project(v, P[size_t(k)] + lambda * (c - P[size_t(k)])).transpose();
+        }
+        int inv1 = 0;
+        const double m1 = region_quality(inv1);
+        if (inv1 <= inv0 && m1 > m0 + 1e-6) {
+          ++moved;
+          break;
+        }
+        for (int k = 0; k < 8; ++k) V_.row(H_(h, k)) = P[size_t(k)].transpose();
+      }
+    }
+    st_.moves += moved;
+    return moved;
   }
 
   // (c) global shape improvement: coordinate descent of the Winslow energy of the whole mesh, then of

@@ -20,6 +20,11 @@
 ///  (b) max-min: move each vertex whose incident hexes are below `target_sj` to maximise the minimum
 ///      scaled Jacobian (Verdict, centre term included) of its incident hexes: gradient of a soft minimum,
 ///      backtracking line search, plus the average of its edge neighbours as a candidate;
+///  (b') whole-hex moves: hexes below `target_sj`, worst first, one at a time: the 8 vertices move towards
+///      the cube that best fits the hex (least-squares rotation, scale and translation: Kabsch), by 1, 1/2
+///      or 1/4 of the way, boundary vertices projected back onto the surface; kept only if the minimum scaled
+///      Jacobian of all hexes around the moved vertices rises and none inverts (two boundary vertices pressed
+///      together need to move at once, which (b) cannot do); then (b) again, for `element_iterations` rounds;
 ///  (c) shape improvement, alternating sweeps: every vertex descends the same Winslow energy (ε -> 0) —
 ///      coordinate descent of one global energy — or ascends the sum of its hexes' scaled Jacobians (the
 ///      average the report measures).
@@ -40,6 +45,7 @@ struct OptimizeParams {
   int global_rings = 3;            ///< global untangling frees the inverted hexes' vertices grown by this many rings, [0, 50]
   int untangle_iterations = 200;   ///< max untangling sweeps, [0, 10000]
   int iterations = 30;             ///< max max-min sweeps, [0, 10000]
+  int element_iterations = 5;       ///< rounds of whole-hex moves (each followed by max-min sweeps), [0, 1000]
   int shape_iterations = 10;       ///< global shape-improvement sweeps, [0, 10000]
   double target_sj = 0.8;          ///< max-min sweeps touch vertices with an incident hex below this SJ, [0, 1]
   double shape_target_sj = 0.95;   ///< shape sweeps touch vertices with an incident hex below this SJ, [0, 1]
@@ -53,6 +59,8 @@ struct OptimizeStats {
   double sj_min_after = 0, sj_avg_after = 0;
   long inverted_before = 0, inverted_after = 0;   ///< hexes with corner scaled Jacobian <= 0
   int untangle_sweeps = 0, maxmin_sweeps = 0, shape_sweeps = 0;
+  int element_sweeps = 0;              ///< rounds of whole-hex moves
+  long element_moves = 0;              ///< accepted whole-hex moves
   int global_outer = 0;                ///< ε updates of the global untangling
   long global_lbfgs_iterations = 0;    ///< its L-BFGS iterations
   long global_free_vertices = 0;       ///< vertices it moved (all runs)

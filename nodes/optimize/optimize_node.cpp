@@ -19,6 +19,8 @@ const bool registered = register_node(make_node<P>(
              0, 50)
         .add("untangle_iterations", &P::untangle_iterations, "max untangling sweeps", 0, 10000)
         .add("iterations", &P::iterations, "max max-min scaled Jacobian sweeps", 0, 10000)
+        .add("element_iterations", &P::element_iterations,
+             "rounds of whole-hex moves towards the best-fitting cube, each followed by max-min sweeps", 0, 1000)
         .add("shape_iterations", &P::shape_iterations, "global shape-improvement sweeps", 0, 10000)
         .add("target_sj", &P::target_sj, "max-min sweeps move vertices of hexes below this scaled Jacobian", 0.0, 1.0)
         .add("shape_target_sj", &P::shape_target_sj, "shape sweeps move vertices of hexes below this scaled Jacobian",
@@ -47,6 +49,8 @@ const bool registered = register_node(make_node<P>(
       j["untangle_sweeps"] = s.untangle_sweeps;
       j["maxmin_sweeps"] = s.maxmin_sweeps;
       j["shape_sweeps"] = s.shape_sweeps;
+      j["element_sweeps"] = s.element_sweeps;
+      j["element_moves"] = s.element_moves;
       j["iterations"] = s.iterations;
       j["moves"] = s.moves;
       j["colours"] = s.colours;
@@ -62,7 +66,7 @@ const bool registered = register_node(make_node<P>(
                  std::to_string(s.inverted_before) + " before)");
       if (s.time_budget_hit) ctx.warn("optimization stopped at its time budget of " + std::to_string(p.time_budget) + " s");
       return make_artefact(std::move(out));
-    }).with_version("3"));
+    }).with_version("4"));
 
 }  // namespace
 }  // namespace polyhex

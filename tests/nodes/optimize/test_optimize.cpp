@@ -120,7 +120,7 @@ TEST_CASE("the optimize node never hands out an inverted hex silently", "[optimi
   NodeContext ctx;
   ctx.id = "opt";
   json params = spec->check_params(
-      json{{"untangle_iterations", 0}, {"global_iterations", 0}, {"iterations", 0}, {"shape_iterations", 0}, {"release_boundary", false}}, "opt");
+      json{{"untangle_iterations", 0}, {"global_iterations", 0}, {"iterations", 0}, {"element_iterations", 0}, {"shape_iterations", 0}, {"release_boundary", false}}, "opt");
   Artefact out = spec->run(params, in, ctx);
   CHECK(out.as<HexMesh>()->H.rows() == 27);
   CHECK(ctx.metrics["inverted"].get<long>() > 0);
@@ -157,6 +157,7 @@ TEST_CASE("boundary vertices are released from the surface only for hexes still 
   none.untangle_iterations = 0;
   none.global_iterations = 0;
   none.iterations = 0;
+  none.element_iterations = 0;
   none.shape_iterations = 0;
   OptimizeStats st2;
   optimize_hexes(g, test::voxel_surface(test::voxel_box(3, 3, 3)), none, &st2);
@@ -185,6 +186,7 @@ TEST_CASE("the global untangling is a fallback: tried only when local moves leav
   OptimizeParams p;
   p.untangle_iterations = 0;
   p.iterations = 0;
+  p.element_iterations = 0;
   p.shape_iterations = 0;
   OptimizeParams q = p;
   q.global_iterations = 0;
@@ -198,4 +200,35 @@ TEST_CASE("the global untangling is a fallback: tried only when local moves leav
   CHECK(sg.inverted_after == 0);
   CHECK(sg.released_vertices == 0);  // the statistics are the kept way's
   CHECK(sg.sj_min_after > 0);
+}
+
+TEST_CASE("whole-hex moves separate two vertices pressed together and keep the boundary on the surface", "[optimize]") {
+  HexMesh g = test::grid_hex_mesh(3, 3, 3);
+  const SurfaceMesh s = test::voxel_surface(test::voxel_box(3, 3, 3));
+  // the centre hex's edge (1,1,1)-(2,1,1) squeezed to a tenth of its length and pushed aside; nothing inverts
+  const int a = (1 * 4 + 1) * 4 + 1, b = (1 * 4 + 1) * 4 + 2;
+  REQUIRE(g.V.row(b) == Eigen::RowVector3d(2, 1, 1));
+  g.V.row(a) << 1.45, 1.4, 1.3;
+  g.V.row(b) << 1.55, 1.4, 1.3;
+  const HexQuality q0 = hex_quality(g, nullptr);
+  REQUIRE(q0.inverted == 0);
+  REQUIRE(q0.sj_min < 0.5);
+  OptimizeParams only;  // whole-hex moves alone: no other phase may move a vertex
+  only.untangle_iterations = 0;
+  only.iterations = 0;
+  only.shape_iterations = 0;
+  only.element_iterations = 3;
+  OptimizeStats st;
+  const HexMesh m = optimize_hexes(g, s, only, &st);
+  const HexQuality q1 = hex_quality(m, nullptr);
+  CHECK(st.element_moves > 0);
+  CHECK(q1.inverted == 0);
+  CHECK(q1.sj_min > q0.sj_min + 0.1);
+  CHECK((m.V.row(b) - m.V.row(a)).norm() > 0.3);
+  CHECK(boundary_distance(m, s) < 1e-9);
+  // an undistorted grid offers nothing to improve: no whole-hex move is kept
+  OptimizeStats st2;
+  const HexMesh same = optimize_hexes(test::grid_hex_mesh(2, 2, 2), test::voxel_surface(test::voxel_box(2, 2, 2)), only, &st2);
+  CHECK(st2.element_moves == 0);
+  CHECK(same.V == test::grid_hex_mesh(2, 2, 2).V);
 }
