@@ -4,6 +4,7 @@
 #include "nodes/optimize/untangle_global.h"
 
 #include <Eigen/SVD>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -136,8 +137,9 @@ class Optimizer {
   /// then the untangling sweeps run again.
   void release_and_untangle() {
     if (!p_.release_boundary || count_inverted() == 0) return;
+    const auto q = all_quality();
     for (Eigen::Index h = 0; h < H_.rows(); ++h)
-      if (hex_scaled_jacobian(points(int(h))).corner_min <= 0)
+      if (q[size_t(h)].corner_min <= 0)
         for (int k = 0; k < 8; ++k)
           if (boundary_[size_t(H_(h, k))] && !released_[size_t(H_(h, k))]) released_[size_t(H_(h, k))] = 1, ++st_.released_vertices;
     untangle();
@@ -145,7 +147,7 @@ class Optimizer {
 
   double sj_min() const {
     double m = 1;
-    for (Eigen::Index h = 0; h < H_.rows(); ++h) m = std::min(m, hex_scaled_jacobian(points(int(h))).sj);
+    for (const HexSJ& q : all_quality()) m = std::min(m, q.sj);
     return m;
   }
 
@@ -237,27 +239,26 @@ class Optimizer {
       e += hex_winslow_energy(points(inc_[size_t(i)]), scale_[size_t(v)], eps);
     return e;
   }
-  /// Soft minimum of the corner and centre scaled Jacobians, negated (to be minimised).
-  double soft_min(int v) const {
+  /// Soft minimum of the corner and centre scaled Jacobians of the hexes around v, negated (to be
+  /// minimised); `l` gets the local measures of the same evaluation.
+  double soft_min(int v, Local& l) const {
     constexpr double beta = 40.0;
-    double m = 1.0;
-    std::vector<double> terms;
-    terms.reserve(72);
-    for (int i = start_[size_t(v)]; i < start_[size_t(v) + 1]; ++i) {
-      const auto p = points(inc_[size_t(i)]);
-      for (const auto& c : kCorner) {
-        const Vec3 a = p[size_t(c[1])] - p[size_t(c[0])], b = p[size_t(c[2])] - p[size_t(c[0])],
-                   d = p[size_t(c[3])] - p[size_t(c[0])];
-        const double len = a.norm() * b.norm() * d.norm();
-        const double s = len > 0 ? a.dot(b.cross(d)) / len : -1.0;
-        terms.push_back(s);
-        m = std::min(m, s);
-      }
-      terms.push_back(hex_scaled_jacobian(p).sj);
-      m = std::min(m, terms.back());
+    l = Local{1.0, 0.0, 0};
+    std::array<double, 72> terms;  // 9 per hex; a vertex in more than 8 hexes uses the vector below
+    std::vector<double> more;
+    const int n = start_[size_t(v) + 1] - start_[size_t(v)];
+    double* t = n <= 8 ? terms.data() : (more.resize(size_t(9 * n)), more.data());
+    std::array<double, 9> ht;
+    for (int i = 0; i < n; ++i) {
+      const HexSJ s = hex_scaled_jacobian(points(inc_[size_t(start_[size_t(v)] + i)]), ht);
+      std::copy(ht.begin(), ht.end(), t + 9 * i);
+      l.sj_min = std::min(l.sj_min, s.sj);
+      l.sj_sum += s.sj;
+      l.inverted += s.corner_min <= 0;
     }
+    const double m = std::min(l.sj_min, 1.0);
     double sum = 0;
-    for (double s : terms) sum += std::exp(-beta * (s - m));
+    for (int i = 0; i < 9 * n; ++i) sum += std::exp(-beta * (t[i] - m));
     return -(m - std::log(sum) / beta);
   }
 
@@ -331,17 +332,30 @@ class Optimizer {
     return moved;
   }
 
-  long count_inverted(double* det_min = nullptr) const {
-    long n = 0;
-    double m = std::numeric_limits<double>::infinity();
-    for (Eigen::Index h = 0; h < H_.rows(); ++h) {
-      const auto p = points(int(h));
-      n += hex_scaled_jacobian(p).corner_min <= 0;
-      if (det_min) m = std::min(m, min_corner_det(p, scale_[size_t(H_(h, 0))]));
-    }
-    if (det_min) *det_min = m;
-    return n;
+  /// Scaled Jacobian of every hex at the current positions (in parallel; one slot per hex, so the
+  /// same figures for any thread count).
+  std::vector<HexSJ> all_quality() const {
+    std::vector<HexSJ> q(size_t(H_.rows()));
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, H_.rows(), 512), [&](const tbb::blocked_range<Eigen::Index>& r) {
+      for (Eigen::Index h = r.begin(); h < r.end(); ++h) q[size_t(h)] = hex_scaled_jacobian(points(int(h)));
+    });
+    return q;
   }
+
+  long count_inverted(double* det_min = nullptr) const {
+    std::vector<double> dmin(det_min ? size_t(H_.rows()) : 0);
+    std::vector<char> inv(size_t(H_.rows()));
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, H_.rows(), 512), [&](const tbb::blocked_range<Eigen::Index>& r) {
+      for (Eigen::Index h = r.begin(); h < r.end(); ++h) {
+        const auto p = points(int(h));
+        inv[size_t(h)] = hex_scaled_jacobian(p).corner_min <= 0;
+        if (det_min) dmin[size_t(h)] = min_corner_det(p, scale_[size_t(H_(h, 0))]);
+      }
+    });
+    if (det_min) *det_min = dmin.empty() ? std::numeric_limits<double>::infinity() : *std::min_element(dmin.begin(), dmin.end());
+    return long(std::count(inv.begin(), inv.end(), 1));
+  }
+
 
   // (a) untangling: all free vertices near the inverted hexes at once (L-BFGS), then vertex by vertex
   /// Kept only if it lowers the number of inverted hexes (a failed global descent spreads distortion).
@@ -379,8 +393,9 @@ class Optimizer {
       const double eps = std::sqrt(1e-8 + 0.04 * std::min(dmin, 0.0) * std::min(dmin, 0.0));
       // vertices of inverted hexes and of the hexes around them
       std::vector<char> sel(size_t(V_.rows()), 0);
+      const auto q = all_quality();
       for (Eigen::Index h = 0; h < H_.rows(); ++h)
-        if (hex_scaled_jacobian(points(int(h))).corner_min <= 0)
+        if (q[size_t(h)].corner_min <= 0)
           for (int k = 0; k < 8; ++k) {
             const int v = H_(h, k);
             for (int i = start_[size_t(v)]; i < start_[size_t(v) + 1]; ++i)
@@ -401,8 +416,9 @@ class Optimizer {
     for (int it = 0; it < p_.iterations && !out_of_time(); ++it) {
       std::vector<char> sel(size_t(V_.rows()), 0);
       double gmin = 1;
+      const auto q = all_quality();
       for (Eigen::Index h = 0; h < H_.rows(); ++h) {
-        const double s = hex_scaled_jacobian(points(int(h))).sj;
+        const double s = q[size_t(h)].sj;
         gmin = std::min(gmin, s);
         if (s < p_.target_sj)
           for (int k = 0; k < 8; ++k) sel[size_t(H_(h, k))] = 1;
@@ -417,11 +433,11 @@ class Optimizer {
         Vec3 avg = Vec3::Zero();
         for (int w : nbr_[size_t(v)]) avg += V_.row(w).transpose();
         avg /= double(std::max<size_t>(nbr_[size_t(v)].size(), 1));
-        auto ok = [&] {
-          const Local l = local(v);
-          return l.inverted <= l0.inverted && l.sj_min > l0.sj_min + 1e-9;
-        };
-        return descend(v, [&] { return soft_min(v); }, ok, 0.2, boundary_[size_t(v)] ? nullptr : &avg);
+        // descend() judges a trial position right after evaluating the objective there: `ok` reads the
+        // local measures of that same evaluation
+        Local last{};
+        auto ok = [&] { return last.inverted <= l0.inverted && last.sj_min > l0.sj_min + 1e-9; };
+        return descend(v, [&] { return soft_min(v, last); }, ok, 0.2, boundary_[size_t(v)] ? nullptr : &avg);
       });
       if (moved == 0) break;
     }
@@ -434,8 +450,9 @@ class Optimizer {
   // vertices taken together and inverts none.
   long elements() {
     std::vector<std::pair<double, int>> poor;
+    const auto q = all_quality();
     for (Eigen::Index h = 0; h < H_.rows(); ++h) {
-      const double s = hex_scaled_jacobian(points(int(h))).sj;
+      const double s = q[size_t(h)].sj;
       if (s < p_.target_sj) poor.emplace_back(s, int(h));
     }
     std::sort(poor.begin(), poor.end());
@@ -503,8 +520,9 @@ class Optimizer {
     for (int it = 0; it < p_.shape_iterations && !out_of_time(); ++it) {
       // vertices of hexes below shape_target_sj (a regular grid interior needs no work)
       std::vector<char> all(size_t(V_.rows()), 0);
+      const auto q = all_quality();
       for (Eigen::Index h = 0; h < H_.rows(); ++h)
-        if (hex_scaled_jacobian(points(int(h))).sj < p_.shape_target_sj)
+        if (q[size_t(h)].sj < p_.shape_target_sj)
           for (int k = 0; k < 8; ++k) all[size_t(H_(h, k))] = 1;
       ++st_.shape_sweeps;
       ++st_.iterations;

@@ -218,15 +218,24 @@ RowMatrixX3i quads_to_triangles(const RowMatrixX4iQ& q) {
 
 }  // namespace
 
-HexSJ hex_scaled_jacobian(const std::array<Eigen::Vector3d, 8>& p) {
+HexSJ hex_scaled_jacobian(const std::array<Eigen::Vector3d, 8>& p, std::array<double, 9>& terms) {
   double corner_min = 1.0;
-  for (const auto& c : kCorners)
-    corner_min = std::min(corner_min, scaled(p[c[1]] - p[c[0]], p[c[2]] - p[c[0]], p[c[3]] - p[c[0]]));
+  for (size_t k = 0; k < 8; ++k) {
+    const auto& c = kCorners[k];
+    terms[k] = scaled(p[c[1]] - p[c[0]], p[c[2]] - p[c[0]], p[c[3]] - p[c[0]]);
+    corner_min = std::min(corner_min, terms[k]);
+  }
   // Principal axes at the centre (Verdict): the averaged edge directions of the three axes.
   const Vec3 xi = (p[1] + p[2] + p[5] + p[6]) - (p[0] + p[3] + p[4] + p[7]);
   const Vec3 eta = (p[2] + p[3] + p[6] + p[7]) - (p[0] + p[1] + p[4] + p[5]);
   const Vec3 zeta = (p[4] + p[5] + p[6] + p[7]) - (p[0] + p[1] + p[2] + p[3]);
-  return HexSJ{std::min(corner_min, scaled(xi, eta, zeta)), corner_min};
+  terms[8] = scaled(xi, eta, zeta);
+  return HexSJ{std::min(corner_min, terms[8]), corner_min};
+}
+
+HexSJ hex_scaled_jacobian(const std::array<Eigen::Vector3d, 8>& p) {
+  std::array<double, 9> terms;
+  return hex_scaled_jacobian(p, terms);
 }
 
 void hex_scaled_jacobians(const HexMesh& mesh, Eigen::VectorXd& sj, Eigen::VectorXd& corner_min) {

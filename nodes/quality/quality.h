@@ -60,6 +60,10 @@ struct HexSJ {
 /// Scaled Jacobian of one hex given its 8 corners in VTK_HEXAHEDRON order.
 HexSJ hex_scaled_jacobian(const std::array<Eigen::Vector3d, 8>& p);
 
+/// The same, and its 9 terms: terms[0..7] the corners (each in [-1, 1], 0 for a zero-length edge),
+/// terms[8] the centre principal axes; sj is their minimum.
+HexSJ hex_scaled_jacobian(const std::array<Eigen::Vector3d, 8>& p, std::array<double, 9>& terms);
+
 /// Scaled Jacobian of every hex (in parallel).
 /// \param sj         out: #H with the centre term  \param corner_min  out: #H corners only
 /// \pre indices of mesh.H in range (see check_hex_mesh)
