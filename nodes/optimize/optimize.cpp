@@ -27,6 +27,13 @@ namespace {
 using Vec3 = Eigen::Vector3d;
 using Clock = std::chrono::steady_clock;
 
+/// Adds the seconds of its lifetime to `total`.
+struct PhaseTimer {
+  double& total;
+  Clock::time_point t0 = Clock::now();
+  ~PhaseTimer() { total += std::chrono::duration<double>(Clock::now() - t0).count(); }
+};
+
 using optimize_detail::chi;
 using optimize_detail::kCorner;
 
@@ -113,10 +120,11 @@ class Optimizer {
     maxmin();
     for (int round = 0; round < p_.element_iterations && !out_of_time(); ++round) {
       ++st_.element_sweeps;
+      touched_.assign(size_t(V_.rows()), 0);
       const long moved = elements();
       st_.element_moves += moved;
       if (moved == 0) break;
-      maxmin();
+      maxmin(&touched_);  // max-min again where the whole-hex moves changed the mesh
     }
     shape();
     HexMesh out;
@@ -360,6 +368,7 @@ class Optimizer {
   // (a) untangling: all free vertices near the inverted hexes at once (L-BFGS), then vertex by vertex
   /// Kept only if it lowers the number of inverted hexes (a failed global descent spreads distortion).
   void global_untangle() {
+    PhaseTimer timer{st_.global_seconds};
     if (p_.global_iterations <= 0 || out_of_time()) return;
     const long before = count_inverted();
     if (before == 0) return;
@@ -381,6 +390,7 @@ class Optimizer {
   }
 
   void untangle() {
+    PhaseTimer timer{st_.untangle_seconds};
     long best = std::numeric_limits<long>::max();
     for (int it = 0, stall = 0; it < p_.untangle_iterations && !out_of_time(); ++it) {
       throw_if_interrupted();
@@ -411,20 +421,29 @@ class Optimizer {
   }
 
   // (b) per-vertex max-min scaled Jacobian
-  void maxmin() {
+  /// Sweeps over the vertices of hexes below `target_sj` until the global minimum stalls, then sweeps over
+  /// those of the worst hexes only (below the minimum + 0.15: cheap sweeps, so many of them) until it
+  /// stalls for 5 sweeps in a row.
+  /// \param focus  if given, only its flagged vertices may move (after whole-hex moves: around them)
+  void maxmin(const std::vector<char>* focus = nullptr) {
+    PhaseTimer timer{st_.maxmin_seconds};
     double prev = -2;
-    for (int it = 0; it < p_.iterations && !out_of_time(); ++it) {
+    bool worst_only = false;
+    for (int it = 0, stall = 0; it < 4 * p_.iterations && !out_of_time(); ++it) {
       std::vector<char> sel(size_t(V_.rows()), 0);
-      double gmin = 1;
       const auto q = all_quality();
-      for (Eigen::Index h = 0; h < H_.rows(); ++h) {
-        const double s = q[size_t(h)].sj;
-        gmin = std::min(gmin, s);
-        if (s < p_.target_sj)
-          for (int k = 0; k < 8; ++k) sel[size_t(H_(h, k))] = 1;
+      double gmin = 1;
+      for (const HexSJ& x : q) gmin = std::min(gmin, x.sj);
+      if (!worst_only && ((gmin <= prev + 1e-5 && it > 2) || it >= p_.iterations)) worst_only = true, stall = 0;
+      if (worst_only) {
+        stall = gmin <= prev + 1e-5 ? stall + 1 : 0;
+        if (stall >= 5) break;
       }
-      if (gmin <= prev + 1e-5 && it > 2) break;
-      prev = gmin;
+      const double below = worst_only ? std::min(p_.target_sj, gmin + 0.15) : p_.target_sj;
+      for (Eigen::Index h = 0; h < H_.rows(); ++h)
+        if (q[size_t(h)].sj < below)
+          for (int k = 0; k < 8; ++k) sel[size_t(H_(h, k))] = !focus || (*focus)[size_t(H_(h, k))];
+      prev = std::max(prev, gmin);
       ++st_.maxmin_sweeps;
       ++st_.iterations;
       const long moved = sweep(sel, [&](int v) {
@@ -439,7 +458,10 @@ class Optimizer {
         auto ok = [&] { return last.inverted <= l0.inverted && last.sj_min > l0.sj_min + 1e-9; };
         return descend(v, [&] { return soft_min(v, last); }, ok, 0.2, boundary_[size_t(v)] ? nullptr : &avg);
       });
-      if (moved == 0) break;
+      if (moved == 0) {
+        if (worst_only) break;
+        worst_only = true, stall = 0;
+      }
     }
   }
 
@@ -449,6 +471,7 @@ class Optimizer {
   // first; a move is kept only if it raises the minimum scaled Jacobian of every hex around the moved
   // vertices taken together and inverts none.
   long elements() {
+    PhaseTimer timer{st_.element_seconds};
     std::vector<std::pair<double, int>> poor;
     const auto q = all_quality();
     for (Eigen::Index h = 0; h < H_.rows(); ++h) {
@@ -504,6 +527,8 @@ class Optimizer {
         const double m1 = region_quality(inv1);
         if (inv1 <= inv0 && m1 > m0 + 1e-6) {
           ++moved;
+          for (int r : region)
+            for (int k = 0; k < 8; ++k) touched_[size_t(H_(r, k))] = 1;
           break;
         }
         for (int k = 0; k < 8; ++k) V_.row(H_(h, k)) = P[size_t(k)].transpose();
@@ -517,6 +542,7 @@ class Optimizer {
   // the sum of the scaled Jacobians (the average the quality report measures); a move never lowers the
   // local minimum nor the local sum of the scaled Jacobians
   void shape() {
+    PhaseTimer timer{st_.shape_seconds};
     for (int it = 0; it < p_.shape_iterations && !out_of_time(); ++it) {
       // vertices of hexes below shape_target_sj (a regular grid interior needs no work)
       std::vector<char> all(size_t(V_.rows()), 0);
@@ -553,6 +579,7 @@ class Optimizer {
   std::vector<std::vector<int>> classes_;
   std::vector<char> boundary_;
   std::vector<char> released_;  ///< boundary vertices allowed off the surface (last-resort untangling)
+  std::vector<char> touched_;   ///< vertices of the hexes around the last round's whole-hex moves
   std::vector<Vec3> normals_;
 };
 

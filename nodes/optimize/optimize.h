@@ -19,7 +19,9 @@
 ///      hence the order;
 ///  (b) max-min: move each vertex whose incident hexes are below `target_sj` to maximise the minimum
 ///      scaled Jacobian (Verdict, centre term included) of its incident hexes: gradient of a soft minimum,
-///      backtracking line search, plus the average of its edge neighbours as a candidate;
+///      backtracking line search, plus the average of its edge neighbours as a candidate; when the global
+///      minimum stalls (or after `iterations` sweeps), sweeps over the vertices of the worst hexes only
+///      (below the minimum + 0.15), cheap, until the minimum stalls for 5 sweeps;
 ///  (b') whole-hex moves: hexes below `target_sj`, worst first, one at a time: the 8 vertices move towards
 ///      the cube that best fits the hex (least-squares rotation, scale and translation: Kabsch), by 1, 1/2
 ///      or 1/4 of the way, boundary vertices projected back onto the surface; kept only if the minimum scaled
@@ -44,7 +46,7 @@ struct OptimizeParams {
   int global_iterations = 15;      ///< ε updates of the global L-BFGS untangling (untangle_global.h), 0 = off, [0, 1000]
   int global_rings = 3;            ///< global untangling frees the inverted hexes' vertices grown by this many rings, [0, 50]
   int untangle_iterations = 200;   ///< max untangling sweeps, [0, 10000]
-  int iterations = 30;             ///< max max-min sweeps, [0, 10000]
+  int iterations = 30;             ///< max max-min sweeps over all poor hexes (then up to 3x as many over the worst), [0, 10000]
   int element_iterations = 5;       ///< rounds of whole-hex moves (each followed by max-min sweeps), [0, 1000]
   int shape_iterations = 10;       ///< global shape-improvement sweeps, [0, 10000]
   double target_sj = 0.8;          ///< max-min sweeps touch vertices with an incident hex below this SJ, [0, 1]
@@ -74,6 +76,7 @@ struct OptimizeStats {
   bool time_budget_hit = false;
   long released_vertices = 0;          ///< boundary vertices released from the surface to untangle (release_boundary)
   double seconds = 0;
+  double untangle_seconds = 0, global_seconds = 0, maxmin_seconds = 0, element_seconds = 0, shape_seconds = 0;  ///< per phase
 };
 
 /// Optimizes vertex positions of a hex mesh (connectivity unchanged).

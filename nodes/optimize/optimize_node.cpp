@@ -61,6 +61,8 @@ const bool registered = register_node(make_node<P>(
                  std::to_string(s.boundary_distance_max) + " of the bbox diagonal)");
       j["time_budget_hit"] = s.time_budget_hit;
       j["seconds"] = s.seconds;
+      j["phase_seconds"] = {{"untangle", s.untangle_seconds}, {"global", s.global_seconds}, {"maxmin", s.maxmin_seconds},
+                            {"element", s.element_seconds}, {"shape", s.shape_seconds}};
       if (s.inverted_after > 0)
         ctx.warn(std::to_string(s.inverted_after) + " hexes are still inverted after optimization (" +
                  std::to_string(s.inverted_before) + " before)");
