@@ -38,6 +38,22 @@ bool writes_side_files(const ResolvedNode& n, bool save_all) {
   return false;
 }
 
+/// Where --save-all writes node `id`'s artefact: OUT/<id><ext>, or OUT/<id>.node<ext> when a node of the
+/// graph names that file in its `path` param (a writer's output, e.g. node `hex` and `write` -> hex.vtk,
+/// or a reader's input), so a saved artefact never replaces a file the config asks for.
+std::filesystem::path save_all_path(const std::vector<ResolvedNode>& nodes, const std::string& id, const std::string& ext,
+                                    const std::filesystem::path& out_dir) {
+  namespace fs = std::filesystem;
+  const fs::path plain = (out_dir / (id + ext)).lexically_normal();
+  for (const auto& n : nodes) {
+    const auto it = n.params.find("path");
+    if (it == n.params.end() || !it->is_string()) continue;
+    const fs::path p = it->get<std::string>();
+    if ((out_dir / p).lexically_normal() == plain || p.lexically_normal() == plain) return out_dir / (id + ".node" + ext);
+  }
+  return out_dir / (id + ext);
+}
+
 }  // namespace
 
 std::vector<std::string> Pipeline::cache_keys() const {
@@ -225,7 +241,7 @@ RunResult Pipeline::run(const RunOptions& opt) const {
       outputs[i] = out;
       if (opt.save_all && out) {
         auto [ext, saver] = Registry::instance().saver(out.type);
-        if (saver) saver(out, opt.out_dir / (n.id + ext));
+        if (saver) saver(out, save_all_path(nodes_, n.id, ext, opt.out_dir));
       }
     } catch (const NodeError&) {
       throw;

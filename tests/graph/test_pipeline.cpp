@@ -212,3 +212,20 @@ TEST_CASE("every config in configs/ parses and validates", "[graph][configs]") {
   }
   CHECK(count >= 1);
 }
+
+TEST_CASE("save-all never replaces a file the config writes: a clashing artefact goes to <id>.node<ext>", "[graph]") {
+  // node `tets` saved under --save-all would be OUT/tets.vtk, which is the writer's output
+  Pipeline p = build(R"({"nodes":[
+      {"id":"surface","type":"shapes","params":{"name":"box","resolution":8}},
+      {"id":"tets","type":"tetrahedralize/tetgen","params":{"edge_length":0.5},"inputs":{"surface":"surface"}},
+      {"id":"write","type":"write_tetmesh","params":{"path":"tets.vtk"},"inputs":{"mesh":"tets"}}]})");
+  RunOptions opt;
+  opt.out_dir = temp_dir("saveall");
+  opt.save_all = true;
+  RunResult r = p.run(opt);
+  REQUIRE(r.error.empty());
+  CHECK(std::filesystem::exists(opt.out_dir / "tets.vtk"));       // the writer's
+  CHECK(std::filesystem::exists(opt.out_dir / "tets.node.vtk"));  // --save-all's
+  CHECK(std::filesystem::exists(opt.out_dir / "surface.obj"));    // no clash: the plain name
+  CHECK_FALSE(std::filesystem::exists(opt.out_dir / "surface.node.obj"));
+}
