@@ -120,11 +120,10 @@ class Optimizer {
     maxmin();
     for (int round = 0; round < p_.element_iterations && !out_of_time(); ++round) {
       ++st_.element_sweeps;
-      touched_.assign(size_t(V_.rows()), 0);
       const long moved = elements();
       st_.element_moves += moved;
       if (moved == 0) break;
-      maxmin(&touched_);  // max-min again where the whole-hex moves changed the mesh
+      maxmin();
     }
     shape();
     HexMesh out;
@@ -424,8 +423,7 @@ class Optimizer {
   /// Sweeps over the vertices of hexes below `target_sj` until the global minimum stalls, then sweeps over
   /// those of the worst hexes only (below the minimum + 0.15: cheap sweeps, so many of them) until it
   /// stalls for 5 sweeps in a row.
-  /// \param focus  if given, only its flagged vertices may move (after whole-hex moves: around them)
-  void maxmin(const std::vector<char>* focus = nullptr) {
+  void maxmin() {
     PhaseTimer timer{st_.maxmin_seconds};
     double prev = -2;
     bool worst_only = false;
@@ -442,7 +440,7 @@ class Optimizer {
       const double below = worst_only ? std::min(p_.target_sj, gmin + 0.15) : p_.target_sj;
       for (Eigen::Index h = 0; h < H_.rows(); ++h)
         if (q[size_t(h)].sj < below)
-          for (int k = 0; k < 8; ++k) sel[size_t(H_(h, k))] = !focus || (*focus)[size_t(H_(h, k))];
+          for (int k = 0; k < 8; ++k) sel[size_t(H_(h, k))] = 1;
       prev = std::max(prev, gmin);
       ++st_.maxmin_sweeps;
       ++st_.iterations;
@@ -527,8 +525,6 @@ class Optimizer {
         const double m1 = region_quality(inv1);
         if (inv1 <= inv0 && m1 > m0 + 1e-6) {
           ++moved;
-          for (int r : region)
-            for (int k = 0; k < 8; ++k) touched_[size_t(H_(r, k))] = 1;
           break;
         }
         for (int k = 0; k < 8; ++k) V_.row(H_(h, k)) = P[size_t(k)].transpose();
@@ -579,7 +575,6 @@ class Optimizer {
   std::vector<std::vector<int>> classes_;
   std::vector<char> boundary_;
   std::vector<char> released_;  ///< boundary vertices allowed off the surface (last-resort untangling)
-  std::vector<char> touched_;   ///< vertices of the hexes around the last round's whole-hex moves
   std::vector<Vec3> normals_;
 };
 
