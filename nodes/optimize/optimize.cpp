@@ -1,6 +1,7 @@
 // Hex mesh optimization (paper §6): untangle, max-min scaled Jacobian, shape improvement. See optimize.h.
 #include "nodes/optimize/optimize.h"
 #include "nodes/optimize/hex_corners.h"
+#include "nodes/artefacts/hex_topology.h"
 #include "nodes/optimize/untangle_global.h"
 
 #include <Eigen/SVD>
@@ -35,12 +36,12 @@ struct PhaseTimer {
 };
 
 using optimize_detail::chi;
-using optimize_detail::kCorner;
+using optimize_detail::kCorners;
 
 /// Normalised corner determinants of a hex (edge vectors over `scale`).
 double min_corner_det(const std::array<Vec3, 8>& p, double scale) {
   double m = std::numeric_limits<double>::infinity();
-  for (const auto& c : kCorner) {
+  for (const auto& c : kCorners) {
     const Vec3 a = (p[size_t(c[1])] - p[size_t(c[0])]) / scale, b = (p[size_t(c[2])] - p[size_t(c[0])]) / scale,
                d = (p[size_t(c[3])] - p[size_t(c[0])]) / scale;
     m = std::min(m, a.dot(b.cross(d)));
@@ -173,8 +174,7 @@ class Optimizer {
       for (int k = 0; k < 8; ++k) inc_[size_t(fill[size_t(H_(h, k))]++)] = int(h);
     // edge neighbours, and the local edge length
     nbr_.assign(size_t(nv), {});
-    static constexpr int kEdges[12][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6},
-                                          {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
+    using hex_topology::kEdges;
     for (Eigen::Index h = 0; h < H_.rows(); ++h)
       for (const auto& e : kEdges) {
         nbr_[size_t(H_(h, e[0]))].push_back(H_(h, e[1]));
@@ -590,7 +590,7 @@ void summarise(const HexMesh& m, double& sj_min, double& sj_avg, long& inverted)
 
 double hex_winslow_energy(const std::array<Eigen::Vector3d, 8>& p, double scale, double eps) {
   double e = 0;
-  for (const auto& c : kCorner) {
+  for (const auto& c : kCorners) {
     Eigen::Matrix3d J;
     J.col(0) = (p[size_t(c[1])] - p[size_t(c[0])]) / scale;
     J.col(1) = (p[size_t(c[2])] - p[size_t(c[0])]) / scale;

@@ -1,6 +1,7 @@
 // Global untangling by L-BFGS on the regularised Winslow energy. See untangle_global.h.
 #include "nodes/optimize/untangle_global.h"
 #include "nodes/optimize/hex_corners.h"
+#include "nodes/artefacts/hex_topology.h"
 
 #include <tbb/parallel_for.h>
 
@@ -25,13 +26,13 @@ using VecX = Eigen::VectorXd;
 /// (VTK_HEXAHEDRON order); t < 8 the corners (edge vectors ordered for a positive determinant),
 /// t = 8 the centre principal axes (Verdict), each a mean of four parallel edges.
 std::array<Mat83, 9> make_weights() {
-  using optimize_detail::kCorner;
+  using optimize_detail::kCorners;
   std::array<Mat83, 9> W;
   for (int t = 0; t < 8; ++t) {
     W[size_t(t)].setZero();
     for (int c = 0; c < 3; ++c) {
-      W[size_t(t)](kCorner[t][c + 1], c) += 1;
-      W[size_t(t)](kCorner[t][0], c) -= 1;
+      W[size_t(t)](kCorners[t][c + 1], c) += 1;
+      W[size_t(t)](kCorners[t][0], c) -= 1;
     }
   }
   // centre: X1 = (p1-p0)+(p2-p3)+(p5-p4)+(p6-p7), X2 = (p3-p0)+(p2-p1)+(p7-p4)+(p6-p5),
@@ -187,8 +188,7 @@ class GlobalUntangler {
       active_index_[size_t(h)] = int(active_.size());
       active_.push_back(int(h));
       // the hex's mean edge length: the unit of its Jacobians
-      static constexpr int kEdges[12][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6},
-                                            {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
+      using hex_topology::kEdges;
       double s = 0;
       for (const auto& e : kEdges) s += (V_.row(H_(h, e[0])) - V_.row(H_(h, e[1]))).norm();
       scale_.push_back(s > 0 ? s / 12.0 : 1.0);

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "nodes/artefacts/hex_topology.h"
 #include "nodes/quality/quality.h"
 #include "nodes/quality/triangle_tree.h"
 #include "runtime/cancel.h"
@@ -91,7 +92,7 @@ HexMesh remove_boundary_doublets(const HexMesh& mesh, long* doublets, long* remo
       std::sort(k.begin(), k.end());
       quad_id[k] = int(q);
     }
-    static constexpr int kFaces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    using hex_topology::kFaces;
     std::vector<int> bfaces(size_t(cur.H.rows()), 0);
     std::vector<int> best(size_t(cur.V.rows()), -1);
     std::vector<double> best_sj(size_t(cur.V.rows()), 0.0);

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "nodes/artefacts/hex_topology.h"
 #include "nodes/quality/triangle_tree.h"
 #include "runtime/errors.h"
 
@@ -20,14 +21,9 @@ namespace {
 using Vec3 = Eigen::Vector3d;
 using RowMatrixX4iQ = Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>;
 
-// Tables of hexcheck.py, VTK_HEXAHEDRON order.
-// Corner o with its three neighbours (b, c, d) ordered so that the Jacobian of a valid hex is positive.
-constexpr int kCorners[8][4] = {{0, 1, 3, 4}, {1, 2, 0, 5}, {2, 3, 1, 6}, {3, 0, 2, 7},
-                                {4, 7, 5, 0}, {5, 4, 6, 1}, {6, 5, 7, 2}, {7, 6, 4, 3}};
-// Faces, outward for a valid hex.
-constexpr int kFaces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
-constexpr int kEdges[12][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6},
-                               {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
+using hex_topology::kCorners;
+using hex_topology::kEdges;
+using hex_topology::kFaces;
 // The 5-tet split of a hex used for its volume.
 constexpr int kVolumeTets[5][4] = {{0, 1, 3, 4}, {1, 2, 3, 6}, {1, 3, 4, 6}, {1, 4, 5, 6}, {3, 4, 6, 7}};
 
