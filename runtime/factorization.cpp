@@ -231,7 +231,14 @@ void CholmodFactorization::analyse(const Eigen::SparseMatrix<double>& A_in) {
   if (m.L) cholmod_free_factor(&m.L, &m.common.c);
   m.is_factored = false;
   cholmod_sparse s = Impl::view(*A);
-  m.L = cholmod_analyze(&s, &m.common.c);
+  {
+    // METIS (CHOLMOD's fill-reducing ordering) draws from one process-wide random state (GKlib): two
+    // analyses at once interleave its draws, and the orderings, hence the last bits of the solutions,
+    // change from run to run. Analyses are serialised; factorizations and solves still run concurrently.
+    static std::mutex analyse_mutex;
+    std::lock_guard<std::mutex> lock(analyse_mutex);
+    m.L = cholmod_analyze(&s, &m.common.c);
+  }
   if (!m.L || m.common.c.status < CHOLMOD_OK)
     throw SolverError("Cholesky analysis: CHOLMOD failed (status " + std::to_string(m.common.c.status) + ")");
   m.n = A->rows();

@@ -55,7 +55,7 @@ struct PositionDeformStats {
   double distortion_p99 = 0;            ///< its 99th percentile
   double distortion_max = 0;
   double planarity_error = 0;           ///< max distance of a chart vertex from its plane / bbox diagonal (0 by construction)
-  double seconds_poisson = 0, seconds_final = 0;
+  double seconds_poisson = 0, seconds_final = 0;  ///< summed over the three axes (which run in parallel)
 };
 
 /// \param input      the input tet mesh (rest positions), positively oriented
