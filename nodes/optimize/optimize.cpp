@@ -380,12 +380,14 @@ class Optimizer {
     GlobalUntangleParams gp;
     gp.outer_iterations = p_.global_iterations;
     gp.rings = p_.global_rings;
+    gp.seconds = std::max(p_.time_budget - std::chrono::duration<double>(Clock::now() - t0_).count(), 1e-3);
     GlobalUntangleStats gs;
     untangle_global(V_, H_, surf, fixed, tree_, normals_, gp, &gs);
     if (count_inverted() >= before) V_ = keep;
     st_.global_outer += gs.outer;
     st_.global_lbfgs_iterations += gs.lbfgs_iterations;
     st_.global_free_vertices += gs.free_vertices;
+    if (gs.time_budget_hit) st_.time_budget_hit = true;
   }
 
   void untangle() {

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <deque>
 #include <limits>
@@ -91,7 +92,8 @@ class GlobalUntangler {
   GlobalUntangler(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,
                   const std::vector<char>& fixed, const TriangleTree& tree, const std::vector<Vec3>& normals,
                   const GlobalUntangleParams& p, GlobalUntangleStats& st)
-      : V_(V), H_(H), on_surface_(on_surface), fixed_(fixed), tree_(tree), normals_(normals), p_(p), st_(st) {}
+      : V_(V), H_(H), on_surface_(on_surface), fixed_(fixed), tree_(tree), normals_(normals), p_(p), st_(st),
+        t0_(std::chrono::steady_clock::now()) {}
 
   long run() {
     const Eigen::Index nv = V_.rows(), nh = H_.rows();
@@ -105,7 +107,7 @@ class GlobalUntangler {
 
     double mindet = min_det();
     double eps = std::sqrt(1e-12 + 0.04 * std::min(mindet, 0.0) * std::min(mindet, 0.0));
-    for (int it = 0; it < p_.outer_iterations; ++it) {
+    for (int it = 0; it < p_.outer_iterations && !out_of_time(); ++it) {
       throw_if_interrupted();
       ++st_.outer;
       set_base();
@@ -129,6 +131,12 @@ class GlobalUntangler {
   }
 
  private:
+  bool out_of_time() {
+    if (p_.seconds > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count() > p_.seconds)
+      st_.time_budget_hit = true;
+    return st_.time_budget_hit;
+  }
+
   /// L-BFGS at ε -> 0 from an untangled mesh; undone if the projection onto the surface inverts a hex.
   void polish() {
     if (p_.polish_iterations <= 0) return;
@@ -301,7 +309,7 @@ class GlobalUntangler {
     double mean_scale = 0;
     for (double s : scale_) mean_scale += s;
     mean_scale /= double(scale_.size());
-    for (int it = 0; it < iterations; ++it) {
+    for (int it = 0; it < iterations && !out_of_time(); ++it) {
       throw_if_interrupted();
       ++st_.lbfgs_iterations;
       const double gmax = g.lpNorm<Eigen::Infinity>();
@@ -363,6 +371,7 @@ class GlobalUntangler {
   const std::vector<Vec3>& normals_;
   const GlobalUntangleParams& p_;
   GlobalUntangleStats& st_;
+  std::chrono::steady_clock::time_point t0_;
 
   std::vector<int> dof_;       ///< #V first unknown of a free vertex, -1 otherwise
   Eigen::Index ndof_ = 0;

@@ -33,6 +33,7 @@ struct GlobalUntangleParams {
   int lbfgs_iterations = 200;  ///< iterations of one L-BFGS run, [1, 100000]
   int rings = 3;               ///< free vertices: the inverted hexes' vertices grown by this many hex rings, [0, 50]
   int polish_iterations = 100; ///< once untangled: L-BFGS iterations at ε -> 0 (a barrier: no hex inverts), [0, 100000]
+  double seconds = 0;          ///< wall-time budget, checked per L-BFGS iteration (the mesh so far is kept); 0 = none
 };
 
 struct GlobalUntangleStats {
@@ -40,6 +41,7 @@ struct GlobalUntangleStats {
   long lbfgs_iterations = 0;   ///< L-BFGS iterations, all runs
   long free_vertices = 0;
   long inverted_before = 0, inverted_after = 0;  ///< hexes with a corner scaled Jacobian <= 0
+  bool time_budget_hit = false;  ///< stopped at p.seconds
 };
 
 /// Untangles the hexes of H around its inverted ones by global L-BFGS descent (see the file comment).

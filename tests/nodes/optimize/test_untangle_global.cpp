@@ -65,8 +65,20 @@ TEST_CASE("untangle_global unfolds a grid with an interior vertex pushed through
   std::vector<char> on_surface(size_t(g.V.rows()), 0), fixed(size_t(g.V.rows()), 0);
   for (Eigen::Index q = 0; q < Q.rows(); ++q)
     for (int k = 0; k < 4; ++k) on_surface[size_t(Q(q, k))] = 1;
+  // a spent time budget: nothing moves, and the stats say why
+  {
+    RowMatrixX3d V = g.V;
+    GlobalUntangleParams none;
+    none.seconds = 1e-12;
+    GlobalUntangleStats st0;
+    CHECK(untangle_global(V, g.H, on_surface, fixed, tree, normals, none, &st0) >= 4);
+    CHECK(st0.time_budget_hit);
+    CHECK(st0.lbfgs_iterations == 0);
+    CHECK(V == g.V);
+  }
   GlobalUntangleStats st;
   const long left = untangle_global(g.V, g.H, on_surface, fixed, tree, normals, {}, &st);
+  CHECK_FALSE(st.time_budget_hit);
   CHECK(left == 0);
   CHECK(st.inverted_before >= 4);
   CHECK(st.inverted_after == 0);
