@@ -134,34 +134,41 @@ std::mutex& tetgen_mutex() {
 /// tetrahedralize(tetgenbehavior*, ...), which we cannot call: when 1.5.0 fails, terminatetetgen()
 /// frees the mesh and throws, and the destructor of the driver's local tetgenmesh frees it again
 /// while unwinding, which crashes the process (double free; girl.off triggers it). Here the mesh
-/// lives on the heap and after a failure it is deliberately not deleted: its pools are already
-/// freed, only the small shell object leaks.
+/// lives on the heap and after a failure only its storage is released, without the destructor:
+/// terminatetetgen() has already freed its pools (freememory() leaves the pointers set, so the
+/// destructor would free them again). The locals TetGen loses in the failing step are its own
+/// (tools/lsan.supp).
 /// \throw int TetGen's error code
 void run_tetgen(tetgenbehavior& b, tetgenio& in, tetgenio& out) {
   auto* m = new tetgenmesh();
-  m->b = &b;
-  m->in = &in;
-  m->addin = nullptr;
-  m->initializepools();
-  m->transfernodes();
-  exactinit(b.verbose, b.noexact, b.nostaticfilter, m->xmax - m->xmin, m->ymax - m->ymin, m->zmax - m->zmin);
-  clock_t tick = 0;  // TetGen's step timers, unused
-  m->incrementaldelaunay(tick);
-  m->meshsurface();
-  if (b.nobisect) m->recoverboundary(tick);   // -Y: recover the input facets without splitting them
-  else m->constraineddelaunay(tick);
-  m->carveholes();                            // remove the tets outside the surface
-  if (b.nobisect) {
-    if (m->subvertstack->objects > 0) m->suppresssteinerpoints();
-    m->recoverdelaunay();
+  try {
+    m->b = &b;
+    m->in = &in;
+    m->addin = nullptr;
+    m->initializepools();
+    m->transfernodes();
+    exactinit(b.verbose, b.noexact, b.nostaticfilter, m->xmax - m->xmin, m->ymax - m->ymin, m->zmax - m->zmin);
+    clock_t tick = 0;  // TetGen's step timers, unused
+    m->incrementaldelaunay(tick);
+    m->meshsurface();
+    if (b.nobisect) m->recoverboundary(tick);   // -Y: recover the input facets without splitting them
+    else m->constraineddelaunay(tick);
+    m->carveholes();                            // remove the tets outside the surface
+    if (b.nobisect) {
+      if (m->subvertstack->objects > 0) m->suppresssteinerpoints();
+      m->recoverdelaunay();
+    }
+    if (b.quality) m->delaunayrefinement();     // -q and -a
+    if (b.optlevel > 0) m->optimizemesh();      // default -O2/7: flips and smoothing
+    if (!b.nojettison && (m->dupverts > 0 || m->unuverts > 0)) m->jettisonnodes();
+    out.firstnumber = in.firstnumber;
+    out.mesh_dim = in.mesh_dim;
+    m->outnodes(&out);
+    if (m->tetrahedrons->items > 0) m->outelements(&out);
+  } catch (int) {
+    ::operator delete(static_cast<void*>(m));
+    throw;
   }
-  if (b.quality) m->delaunayrefinement();     // -q and -a
-  if (b.optlevel > 0) m->optimizemesh();      // default -O2/7: flips and smoothing
-  if (!b.nojettison && (m->dupverts > 0 || m->unuverts > 0)) m->jettisonnodes();
-  out.firstnumber = in.firstnumber;
-  out.mesh_dim = in.mesh_dim;
-  m->outnodes(&out);
-  if (m->tetrahedrons->items > 0) m->outelements(&out);
   delete m;
 }
 

@@ -108,7 +108,10 @@ TEST_CASE("sweep: axes expand to their cartesian product, last axis fastest", "[
   for (size_t c = 1; c < 6; ++c) CHECK(cases[c]["depends_on"] == cases[0]["name"]);
   CliRun nc = sweep(config("rotation.json") + " --list --no-cache", dir);
   REQUIRE(nc.code == 0);
-  for (const json& c : json::parse(nc.out)["cases"]) CHECK(c["depends_on"].is_null());
+  // Named first: a range-for over json::parse(...)["cases"] would iterate a member of a temporary
+  // that is destroyed before the loop runs (heap-use-after-free under ASan).
+  const json listed = json::parse(nc.out);
+  for (const json& c : listed["cases"]) CHECK(c["depends_on"].is_null());
 }
 
 TEST_CASE("sweep: a linked axis sets both params; named cases keep their order and sets", "[sweep]") {
