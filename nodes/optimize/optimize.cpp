@@ -126,6 +126,7 @@ class Optimizer {
       if (moved == 0) break;
       maxmin();
     }
+    smooth_worst();
     shape();
     HexMesh out;
     out.V = V_;
@@ -534,6 +535,42 @@ class Optimizer {
     }
     st_.moves += moved;
     return moved;
+  }
+
+  // (b'') region smoothing: the worst hexes and `global_rings` rings around them move together by L-BFGS
+  // on the barrier Winslow energy (untangle_global.h smooth_region), then max-min; kept only if the
+  // global minimum rises. For a patch of poor hexes (a folded surface quad and its neighbours) where
+  // neither one vertex nor one hex can move alone.
+  void smooth_worst() {
+    PhaseTimer timer{st_.smooth_seconds};
+    for (int round = 0; round < p_.smooth_iterations && !out_of_time(); ++round) {
+      const auto q = all_quality();
+      double gmin = 1;
+      for (const HexSJ& x : q) {
+        if (x.corner_min <= 0) return;  // the barrier needs an untangled mesh
+        gmin = std::min(gmin, x.sj);
+      }
+      std::vector<char> seeds(size_t(H_.rows()), 0), surf(size_t(V_.rows())), fixed(size_t(V_.rows()));
+      for (size_t h = 0; h < q.size(); ++h) seeds[h] = q[h].sj < gmin + 0.05;
+      for (size_t v = 0; v < size_t(V_.rows()); ++v) {
+        surf[v] = on_surface(int(v));
+        fixed[v] = !movable(int(v));
+      }
+      GlobalUntangleParams gp;
+      gp.rings = p_.global_rings;
+      gp.polish_iterations = 200;
+      gp.seconds = std::max(p_.time_budget - std::chrono::duration<double>(Clock::now() - t0_).count(), 1e-3);
+      const RowMatrixX3d keep = V_;
+      GlobalUntangleStats gs;
+      smooth_region(V_, H_, surf, fixed, tree_, normals_, seeds, gp, &gs);
+      ++st_.smooth_rounds;
+      maxmin();
+      if (count_inverted() > 0 || sj_min() <= gmin + 1e-6) {
+        V_ = keep;
+        break;
+      }
+      ++st_.smooth_kept;
+    }
   }
 
   // (c) global shape improvement: coordinate descent of the Winslow energy of the whole mesh, then of

@@ -27,6 +27,10 @@
 ///      or 1/4 of the way, boundary vertices projected back onto the surface; kept only if the minimum scaled
 ///      Jacobian of all hexes around the moved vertices rises and none inverts (two boundary vertices pressed
 ///      together need to move at once, which (b) cannot do); then (b) again, for `element_iterations` rounds;
+///  (b'') region smoothing: the hexes within 0.05 of the minimum and `global_rings` rings around them move
+///      together by L-BFGS on the Winslow energy at ε -> 0 (a barrier against inversion; untangle_global.h
+///      smooth_region), then (b) again; kept only if the minimum rises, for `smooth_iterations` rounds (a
+///      patch of poor hexes around a folded surface quad, where neither one vertex nor one hex can move alone);
 ///  (c) shape improvement, alternating sweeps: every vertex descends the same Winslow energy (ε -> 0) —
 ///      coordinate descent of one global energy — or ascends the sum of its hexes' scaled Jacobians (the
 ///      average the report measures).
@@ -48,6 +52,7 @@ struct OptimizeParams {
   int untangle_iterations = 200;   ///< max untangling sweeps, [0, 10000]
   int iterations = 30;             ///< max max-min sweeps over all poor hexes (then up to 3x as many over the worst), [0, 10000]
   int element_iterations = 5;       ///< rounds of whole-hex moves (each followed by max-min sweeps), [0, 1000]
+  int smooth_iterations = 5;        ///< rounds of region smoothing around the worst hexes (kept while the minimum rises), [0, 1000]
   int shape_iterations = 10;       ///< global shape-improvement sweeps, [0, 10000]
   double target_sj = 0.8;          ///< max-min sweeps touch vertices with an incident hex below this SJ, [0, 1]
   double shape_target_sj = 0.95;   ///< shape sweeps touch vertices with an incident hex below this SJ, [0, 1]
@@ -63,6 +68,7 @@ struct OptimizeStats {
   int untangle_sweeps = 0, maxmin_sweeps = 0, shape_sweeps = 0;
   int element_sweeps = 0;              ///< rounds of whole-hex moves
   long element_moves = 0;              ///< accepted whole-hex moves
+  int smooth_rounds = 0, smooth_kept = 0;  ///< region smoothing rounds tried / kept
   int global_outer = 0;                ///< ε updates of the global untangling
   long global_lbfgs_iterations = 0;    ///< its L-BFGS iterations
   long global_free_vertices = 0;       ///< vertices it moved (all runs)
@@ -76,7 +82,8 @@ struct OptimizeStats {
   bool time_budget_hit = false;
   long released_vertices = 0;          ///< boundary vertices released from the surface to untangle (release_boundary)
   double seconds = 0;
-  double untangle_seconds = 0, global_seconds = 0, maxmin_seconds = 0, element_seconds = 0, shape_seconds = 0;  ///< per phase
+  double untangle_seconds = 0, global_seconds = 0, maxmin_seconds = 0, element_seconds = 0, smooth_seconds = 0,
+         shape_seconds = 0;  ///< per phase
 };
 
 /// Optimizes vertex positions of a hex mesh (connectivity unchanged).

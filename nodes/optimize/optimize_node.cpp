@@ -21,6 +21,8 @@ const bool registered = register_node(make_node<P>(
         .add("iterations", &P::iterations, "max max-min scaled Jacobian sweeps", 0, 10000)
         .add("element_iterations", &P::element_iterations,
              "rounds of whole-hex moves towards the best-fitting cube, each followed by max-min sweeps", 0, 1000)
+        .add("smooth_iterations", &P::smooth_iterations,
+             "rounds of region smoothing around the worst hexes, kept while the minimum scaled Jacobian rises", 0, 1000)
         .add("shape_iterations", &P::shape_iterations, "global shape-improvement sweeps", 0, 10000)
         .add("target_sj", &P::target_sj, "max-min sweeps move vertices of hexes below this scaled Jacobian", 0.0, 1.0)
         .add("shape_target_sj", &P::shape_target_sj, "shape sweeps move vertices of hexes below this scaled Jacobian",
@@ -51,6 +53,8 @@ const bool registered = register_node(make_node<P>(
       j["shape_sweeps"] = s.shape_sweeps;
       j["element_sweeps"] = s.element_sweeps;
       j["element_moves"] = s.element_moves;
+      j["smooth_rounds"] = s.smooth_rounds;
+      j["smooth_kept"] = s.smooth_kept;
       j["iterations"] = s.iterations;
       j["moves"] = s.moves;
       j["colours"] = s.colours;
@@ -62,13 +66,13 @@ const bool registered = register_node(make_node<P>(
       j["time_budget_hit"] = s.time_budget_hit;
       j["seconds"] = s.seconds;
       j["phase_seconds"] = {{"untangle", s.untangle_seconds}, {"global", s.global_seconds}, {"maxmin", s.maxmin_seconds},
-                            {"element", s.element_seconds}, {"shape", s.shape_seconds}};
+                            {"element", s.element_seconds}, {"smooth", s.smooth_seconds}, {"shape", s.shape_seconds}};
       if (s.inverted_after > 0)
         ctx.warn(std::to_string(s.inverted_after) + " hexes are still inverted after optimization (" +
                  std::to_string(s.inverted_before) + " before)");
       if (s.time_budget_hit) ctx.warn("optimization stopped at its time budget of " + std::to_string(p.time_budget) + " s");
       return make_artefact(std::move(out));
-    }).with_version("4"));
+    }).with_version("5"));
 
 }  // namespace
 }  // namespace polyhex

@@ -95,6 +95,13 @@ class GlobalUntangler {
       : V_(V), H_(H), on_surface_(on_surface), fixed_(fixed), tree_(tree), normals_(normals), p_(p), st_(st),
         t0_(std::chrono::steady_clock::now()) {}
 
+  /// Smoothing of an untangled region: L-BFGS at ε -> 0 around the seed hexes (see smooth_region()).
+  void run_smooth(const std::vector<char>& seeds) {
+    select(seeds, V_.rows(), H_.rows());
+    if (free_.empty() || count_inverted() > 0) return;
+    polish();
+  }
+
   long run() {
     const Eigen::Index nv = V_.rows(), nh = H_.rows();
     std::vector<char> inv(size_t(nh), 0);
@@ -406,6 +413,15 @@ long untangle_global(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<c
   const long left = u.run();
   if (stats) *stats = st;
   return left;
+}
+
+void smooth_region(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,
+                   const std::vector<char>& fixed, const TriangleTree& tree, const std::vector<Eigen::Vector3d>& normals,
+                   const std::vector<char>& seeds, const GlobalUntangleParams& p, GlobalUntangleStats* stats) {
+  GlobalUntangleStats st;
+  GlobalUntangler u(V, H, on_surface, fixed, tree, normals, p, st);
+  u.run_smooth(seeds);
+  if (stats) *stats = st;
 }
 
 }  // namespace polyhex

@@ -57,6 +57,15 @@ long untangle_global(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<c
                      const std::vector<char>& fixed, const TriangleTree& tree, const std::vector<Eigen::Vector3d>& normals,
                      const GlobalUntangleParams& p = {}, GlobalUntangleStats* stats = nullptr);
 
+/// Smooths the hexes around `seeds` (#H flags): the seeds' vertices grown by p.rings rings move together by
+/// L-BFGS on the same energy at ε -> 0, where it is a barrier against inversion (p.polish_iterations
+/// iterations), surface vertices in their tangent planes and projected back; undone if the projection
+/// inverts a hex. Nothing happens when a hex of the region is inverted.
+/// \pre as untangle_global(); seeds.size() == H.rows()
+void smooth_region(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,
+                   const std::vector<char>& fixed, const TriangleTree& tree, const std::vector<Eigen::Vector3d>& normals,
+                   const std::vector<char>& seeds, const GlobalUntangleParams& p, GlobalUntangleStats* stats = nullptr);
+
 /// The energy of one hex: Σ over its 9 Jacobians (8 corners, centre) of |J|_F² / (3 χ(det J, ε)^{2/3}),
 /// J over `scale`; 9 for a cube of edge `scale` as ε -> 0.
 /// \param p     8 corners, VTK_HEXAHEDRON order

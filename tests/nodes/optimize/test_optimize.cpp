@@ -217,6 +217,7 @@ TEST_CASE("whole-hex moves separate two vertices pressed together and keep the b
   only.untangle_iterations = 0;
   only.iterations = 0;
   only.shape_iterations = 0;
+  only.smooth_iterations = 0;
   only.element_iterations = 3;
   OptimizeStats st;
   const HexMesh m = optimize_hexes(g, s, only, &st);

@@ -15,6 +15,30 @@ std::array<Eigen::Vector3d, 8> hex_corners(const HexMesh& m, Eigen::Index h) {
   return p;
 }
 
+/// A 4x4x4 grid of unit cubes and its box surface: the surface's tree and triangle normals, and
+/// which vertices are on it.
+struct BoxGrid {
+  static constexpr int n = 4;
+  HexMesh g = test::grid_hex_mesh(n, n, n);
+  SurfaceMesh s = test::voxel_surface(test::voxel_box(n, n, n));
+  TriangleTree tree{s.V, s.F};
+  std::vector<Eigen::Vector3d> normals;
+  std::vector<char> on_surface, fixed;
+  BoxGrid() : normals(size_t(s.F.rows())), on_surface(size_t(g.V.rows()), 0), fixed(size_t(g.V.rows()), 0) {
+    for (Eigen::Index f = 0; f < s.F.rows(); ++f)
+      normals[size_t(f)] =
+          (s.V.row(s.F(f, 1)) - s.V.row(s.F(f, 0))).cross(s.V.row(s.F(f, 2)) - s.V.row(s.F(f, 0))).normalized().transpose();
+    const auto Q = hex_boundary_quads(g);
+    for (Eigen::Index q = 0; q < Q.rows(); ++q)
+      for (int k = 0; k < 4; ++k) on_surface[size_t(Q(q, k))] = 1;
+  }
+  Eigen::Index vertex_at(const Eigen::RowVector3d& x) const {
+    for (Eigen::Index v = 0; v < g.V.rows(); ++v)
+      if ((g.V.row(v) - x).norm() < 1e-12) return v;
+    return -1;
+  }
+};
+
 }  // namespace
 
 TEST_CASE("untangle energy: 9 for a cube at any scale, gradient zero there and equal to finite differences",
@@ -44,27 +68,13 @@ TEST_CASE("untangle energy: 9 for a cube at any scale, gradient zero there and e
 }
 
 TEST_CASE("untangle_global unfolds a grid with an interior vertex pushed through its neighbours", "[quality-opt]") {
-  const int n = 4;
-  HexMesh g = test::grid_hex_mesh(n, n, n);
-  SurfaceMesh s = test::voxel_surface(test::voxel_box(n, n, n));
-  TriangleTree tree(s.V, s.F);
-  std::vector<Eigen::Vector3d> normals(size_t(s.F.rows()));
-  for (Eigen::Index f = 0; f < s.F.rows(); ++f)
-    normals[size_t(f)] = (s.V.row(s.F(f, 1)) - s.V.row(s.F(f, 0)))
-                             .cross(s.V.row(s.F(f, 2)) - s.V.row(s.F(f, 0)))
-                             .normalized()
-                             .transpose();
+  BoxGrid b;
+  [[maybe_unused]] auto& [g, surface, tree, normals, on_surface, fixed] = b;
   // the vertex at (2, 2, 2) moved 1.6 edges along x: its hexes on the +x side fold
-  Eigen::Index centre = -1;
-  for (Eigen::Index v = 0; v < g.V.rows(); ++v)
-    if ((g.V.row(v) - Eigen::RowVector3d(2, 2, 2)).norm() < 1e-12) centre = v;
+  const Eigen::Index centre = b.vertex_at({2, 2, 2});
   REQUIRE(centre >= 0);
   g.V(centre, 0) += 1.6;
   REQUIRE(hex_quality(g, nullptr).inverted >= 4);
-  const auto Q = hex_boundary_quads(g);
-  std::vector<char> on_surface(size_t(g.V.rows()), 0), fixed(size_t(g.V.rows()), 0);
-  for (Eigen::Index q = 0; q < Q.rows(); ++q)
-    for (int k = 0; k < 4; ++k) on_surface[size_t(Q(q, k))] = 1;
   // a spent time budget: nothing moves, and the stats say why
   {
     RowMatrixX3d V = g.V;
@@ -108,4 +118,41 @@ TEST_CASE("untangle_global leaves an untangled mesh and fixed vertices alone", "
   CHECK(untangle_global(g.V, g.H, on_surface, fixed, tree, normals, {}, &st) > 0);
   CHECK(st.free_vertices == 0);
   CHECK(g.V == folded);
+}
+
+TEST_CASE("smooth_region evens out a squeezed patch, keeps the surface and needs an untangled region", "[quality-opt]") {
+  BoxGrid b;
+  [[maybe_unused]] auto& [g, surface, tree, normals, on_surface, fixed] = b;
+  // a boundary vertex of the z = 0 face slid along the face towards its neighbour: squeezed, not inverted
+  const Eigen::Index v = b.vertex_at({2, 2, 0});
+  REQUIRE(v >= 0);
+  g.V.row(v) << 2.45, 2.35, 0;
+  const HexQuality q0 = hex_quality(g, nullptr);
+  REQUIRE(q0.inverted == 0);
+  REQUIRE(q0.sj_min < 0.6);
+  std::vector<char> seeds(size_t(g.H.rows()), 0);
+  for (Eigen::Index h = 0; h < g.H.rows(); ++h)
+    seeds[size_t(h)] = hex_scaled_jacobian(hex_corners(g, h)).sj < q0.sj_min + 0.05;
+  RowMatrixX3d V = g.V;
+  GlobalUntangleStats st;
+  smooth_region(V, g.H, on_surface, fixed, tree, normals, seeds, {}, &st);
+  HexMesh m = g;
+  m.V = V;
+  const HexQuality q1 = hex_quality(m, nullptr);
+  CHECK(st.lbfgs_iterations > 0);
+  CHECK(q1.inverted == 0);
+  CHECK(q1.sj_min > q0.sj_min + 0.15);
+  for (Eigen::Index i = 0; i < V.rows(); ++i)
+    if (on_surface[size_t(i)]) CHECK(tree.distance(V.row(i).transpose()) < 1e-9);
+  // an inverted hex in the region: nothing moves
+  RowMatrixX3d W = g.V;
+  W(v, 2) = 1.5;  // pushed through the hexes above it
+  HexMesh bad = g;
+  bad.V = W;
+  REQUIRE(hex_quality(bad, nullptr).inverted > 0);
+  GlobalUntangleStats st2;
+  std::vector<char> off_surface(size_t(g.V.rows()), 0);
+  smooth_region(W, g.H, off_surface, fixed, tree, normals, seeds, {}, &st2);
+  CHECK(st2.lbfgs_iterations == 0);
+  CHECK(W == bad.V);
 }
