@@ -364,7 +364,6 @@ class Optimizer {
     return long(std::count(inv.begin(), inv.end(), 1));
   }
 
-
   // (a) untangling: all free vertices near the inverted hexes at once (L-BFGS), then vertex by vertex
   /// Kept only if it lowers the number of inverted hexes (a failed global descent spreads distortion).
   void global_untangle() {
@@ -498,9 +497,9 @@ class Optimizer {
         double m = 1;
         inverted = 0;
         for (int r : region) {
-          const HexSJ q = hex_scaled_jacobian(points(r));
-          m = std::min(m, q.sj);
-          inverted += q.corner_min <= 0;
+          const HexSJ x = hex_scaled_jacobian(points(r));
+          m = std::min(m, x.sj);
+          inverted += x.corner_min <= 0;
         }
         return m;
       };
