@@ -536,10 +536,10 @@ class Optimizer {
     return moved;
   }
 
-  // (b'') region smoothing: the worst hexes and `global_rings` rings around them move together by L-BFGS
-  // on the barrier Winslow energy (untangle_global.h smooth_region), then max-min; kept only if the
-  // global minimum rises. For a patch of poor hexes (a folded surface quad and its neighbours) where
-  // neither one vertex nor one hex can move alone.
+  // (b'') region smoothing: the interior vertices of the worst hexes and `global_rings` rings around them
+  // move together by L-BFGS on the barrier Winslow energy (untangle_global.h smooth_region), then
+  // max-min; kept only if the global minimum rises. For a patch of poor hexes where neither one vertex
+  // nor one hex can move alone. Boundary vertices stay: the energy slid them across creases.
   void smooth_worst() {
     PhaseTimer timer{st_.smooth_seconds};
     for (int round = 0; round < p_.smooth_iterations && !out_of_time(); ++round) {
@@ -553,7 +553,7 @@ class Optimizer {
       for (size_t h = 0; h < q.size(); ++h) seeds[h] = q[h].sj < gmin + 0.05;
       for (size_t v = 0; v < size_t(V_.rows()); ++v) {
         surf[v] = on_surface(int(v));
-        fixed[v] = !movable(int(v));
+        fixed[v] = !movable(int(v)) || boundary_[v];  // the surface stays: sliding boundary vertices cut creases
       }
       GlobalUntangleParams gp;
       gp.rings = p_.global_rings;
