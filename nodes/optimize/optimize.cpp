@@ -543,6 +543,8 @@ class Optimizer {
   void smooth_worst() {
     PhaseTimer timer{st_.smooth_seconds};
     for (int round = 0; round < p_.smooth_iterations && !out_of_time(); ++round) {
+      // the shape improvement (the average) comes after: never spend more than half the budget before it
+      if (std::chrono::duration<double>(Clock::now() - t0_).count() > 0.5 * p_.time_budget) break;
       const auto q = all_quality();
       double gmin = 1;
       for (const HexSJ& x : q) {

@@ -29,7 +29,8 @@
 ///      together need to move at once, which (b) cannot do); then (b) again, for `element_iterations` rounds;
 ///  (b'') region smoothing: the interior vertices of the hexes within 0.05 of the minimum and `global_rings`
 ///      rings around them move together by L-BFGS on the Winslow energy at ε -> 0 (a barrier against inversion; untangle_global.h
-///      smooth_region), then (b) again; kept only if the minimum rises, for `smooth_iterations` rounds (a
+///      smooth_region), then (b) again; kept only if the minimum rises, for `smooth_iterations`
+///      rounds and at most until half the time budget is spent, so that (c) always runs (a
 ///      patch of poor hexes, where neither one vertex nor one hex can move alone); boundary vertices stay (the
 ///      energy would slide them across the surface's creases: L-block volume ratio 0.984 -> 0.972);
 ///  (c) shape improvement, alternating sweeps: every vertex descends the same Winslow energy (ε -> 0) —
