@@ -318,11 +318,28 @@ class Optimizer {
 
  private:
   bool out_of_time() {
-    if (std::chrono::duration<double>(Clock::now() - t0_).count() > p_.time_budget) st_.time_budget_hit = true;
+    if (elapsed() > p_.time_budget) st_.time_budget_hit = true;
     return st_.time_budget_hit;
   }
 
+  double elapsed() const { return std::chrono::duration<double>(Clock::now() - t0_).count(); }
+
   bool movable(int v) const { return p_.move_boundary || !boundary_[size_t(v)]; }
+
+  /// The inputs shared by the global descents (untangle_global.h): which vertices stay on the surface and
+  /// which do not move (`keep_boundary`: no boundary vertex moves), the rings and the time left.
+  GlobalUntangleParams descent_setup(bool keep_boundary, std::vector<char>& surf, std::vector<char>& fixed) const {
+    surf.assign(size_t(V_.rows()), 0);
+    fixed.assign(size_t(V_.rows()), 0);
+    for (size_t v = 0; v < size_t(V_.rows()); ++v) {
+      surf[v] = on_surface(int(v));
+      fixed[v] = !movable(int(v)) || (keep_boundary && boundary_[v]);
+    }
+    GlobalUntangleParams gp;
+    gp.rings = p_.global_rings;
+    gp.seconds = std::max(p_.time_budget - elapsed(), 1e-3);
+    return gp;
+  }
 
   /// One Gauss-Seidel sweep over the selected vertices, colour by colour, in parallel within a colour.
   template <class Step>
@@ -372,15 +389,9 @@ class Optimizer {
     const long before = count_inverted();
     if (before == 0) return;
     const RowMatrixX3d keep = V_;
-    std::vector<char> surf(size_t(V_.rows())), fixed(size_t(V_.rows()));
-    for (size_t v = 0; v < size_t(V_.rows()); ++v) {
-      surf[v] = on_surface(int(v));
-      fixed[v] = !movable(int(v));
-    }
-    GlobalUntangleParams gp;
+    std::vector<char> surf, fixed;
+    GlobalUntangleParams gp = descent_setup(false, surf, fixed);
     gp.outer_iterations = p_.global_iterations;
-    gp.rings = p_.global_rings;
-    gp.seconds = std::max(p_.time_budget - std::chrono::duration<double>(Clock::now() - t0_).count(), 1e-3);
     GlobalUntangleStats gs;
     untangle_global(V_, H_, surf, fixed, tree_, normals_, gp, &gs);
     if (count_inverted() >= before) V_ = keep;
@@ -544,23 +555,18 @@ class Optimizer {
     PhaseTimer timer{st_.smooth_seconds};
     for (int round = 0; round < p_.smooth_iterations && !out_of_time(); ++round) {
       // the shape improvement (the average) comes after: never spend more than half the budget before it
-      if (std::chrono::duration<double>(Clock::now() - t0_).count() > 0.5 * p_.time_budget) break;
+      if (elapsed() > 0.5 * p_.time_budget) break;
       const auto q = all_quality();
       double gmin = 1;
       for (const HexSJ& x : q) {
         if (x.corner_min <= 0) return;  // the barrier needs an untangled mesh
         gmin = std::min(gmin, x.sj);
       }
-      std::vector<char> seeds(size_t(H_.rows()), 0), surf(size_t(V_.rows())), fixed(size_t(V_.rows()));
+      std::vector<char> seeds(size_t(H_.rows()), 0), surf, fixed;
       for (size_t h = 0; h < q.size(); ++h) seeds[h] = q[h].sj < gmin + 0.05;
-      for (size_t v = 0; v < size_t(V_.rows()); ++v) {
-        surf[v] = on_surface(int(v));
-        fixed[v] = !movable(int(v)) || boundary_[v];  // the surface stays: sliding boundary vertices cut creases
-      }
-      GlobalUntangleParams gp;
-      gp.rings = p_.global_rings;
+      // the surface stays: sliding boundary vertices cut creases
+      GlobalUntangleParams gp = descent_setup(true, surf, fixed);
       gp.polish_iterations = 200;
-      gp.seconds = std::max(p_.time_budget - std::chrono::duration<double>(Clock::now() - t0_).count(), 1e-3);
       const RowMatrixX3d keep = V_;
       GlobalUntangleStats gs;
       smooth_region(V_, H_, surf, fixed, tree_, normals_, seeds, gp, &gs);

@@ -1,14 +1,11 @@
 #include "nodes/position_deform/position_deform.h"
 
-#include <cstdio>
-
 #include <Eigen/Dense>
 #include <Eigen/IterativeLinearSolvers>
 #include <oneapi/tbb/parallel_for.h>
 
-#include <array>
-
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
