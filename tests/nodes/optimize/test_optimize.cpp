@@ -23,6 +23,18 @@ double boundary_distance(const HexMesh& m, const SurfaceMesh& s) {
   return d / (s.V.colwise().maxCoeff() - s.V.colwise().minCoeff()).norm();
 }
 
+/// Every phase of the optimizer off: a test turns on the ones it checks.
+OptimizeParams no_phases() {
+  OptimizeParams p;
+  p.untangle_iterations = 0;
+  p.global_iterations = 0;
+  p.iterations = 0;
+  p.element_iterations = 0;
+  p.smooth_iterations = 0;
+  p.shape_iterations = 0;
+  return p;
+}
+
 bool on_box_boundary(const Eigen::RowVector3d& x, double n) {
   return (x.array() < 1e-12).any() || (x.array() > n - 1e-12).any();
 }
@@ -141,10 +153,8 @@ TEST_CASE("boundary vertices are released from the surface only for hexes still 
   CHECK(st.released_vertices == 0);
   CHECK(st.boundary_distance_max < 1e-9);
   // The global descent alone (no sweeps) untangles it too, without releasing the boundary.
-  OptimizeParams global_only;
-  global_only.untangle_iterations = 0;
-  global_only.iterations = 0;
-  global_only.shape_iterations = 0;
+  OptimizeParams global_only = no_phases();
+  global_only.global_iterations = OptimizeParams{}.global_iterations;
   OptimizeStats st3;
   optimize_hexes(g, test::voxel_surface(test::voxel_box(3, 3, 3)), global_only, &st3);
   CHECK(st3.inverted_after_global == 0);
@@ -153,12 +163,7 @@ TEST_CASE("boundary vertices are released from the surface only for hexes still 
   CHECK(st3.released_vertices == 0);
   CHECK(st3.boundary_distance_max < 1e-9);
   // With no untangling sweep allowed the release marks the boundary corners of the inverted hexes.
-  OptimizeParams none;
-  none.untangle_iterations = 0;
-  none.global_iterations = 0;
-  none.iterations = 0;
-  none.element_iterations = 0;
-  none.shape_iterations = 0;
+  const OptimizeParams none = no_phases();
   OptimizeStats st2;
   optimize_hexes(g, test::voxel_surface(test::voxel_box(3, 3, 3)), none, &st2);
   CHECK(st2.released_vertices > 0);
@@ -183,13 +188,9 @@ TEST_CASE("the global untangling is a fallback: tried only when local moves leav
   CHECK(st.inverted_after == 0);
   CHECK(a.V == b.V);
   // local sweeps not allowed to untangle: the local way ends inverted, the global way is tried and kept
-  OptimizeParams p;
-  p.untangle_iterations = 0;
-  p.iterations = 0;
-  p.element_iterations = 0;
-  p.shape_iterations = 0;
-  OptimizeParams q = p;
-  q.global_iterations = 0;
+  OptimizeParams p = no_phases();
+  p.global_iterations = OptimizeParams{}.global_iterations;
+  const OptimizeParams q = no_phases();
   OptimizeStats sg, sl;
   optimize_hexes(g, s, p, &sg);
   optimize_hexes(g, s, q, &sl);
@@ -213,11 +214,7 @@ TEST_CASE("whole-hex moves separate two vertices pressed together and keep the b
   const HexQuality q0 = hex_quality(g, nullptr);
   REQUIRE(q0.inverted == 0);
   REQUIRE(q0.sj_min < 0.5);
-  OptimizeParams only;  // whole-hex moves alone: no other phase may move a vertex
-  only.untangle_iterations = 0;
-  only.iterations = 0;
-  only.shape_iterations = 0;
-  only.smooth_iterations = 0;
+  OptimizeParams only = no_phases();  // whole-hex moves alone: no other phase may move a vertex
   only.element_iterations = 3;
   OptimizeStats st;
   const HexMesh m = optimize_hexes(g, s, only, &st);
