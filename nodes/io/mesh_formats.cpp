@@ -442,7 +442,8 @@ CellsRead read_medit_cells(const std::filesystem::path& path, const std::string&
     } else if (auto it = skip.find(key); it != skip.end()) {
       long long n = c.integer("number of " + key);
       const std::string what = key + " entry";
-      for (long long i = 0; i < n * it->second; ++i) c.token(what);
+      for (long long i = 0; i < n; ++i)  // (not i < n * per-entry: a forged n would overflow)
+        for (int k = 0; k < it->second; ++k) c.token(what);
     } else {
       // Unknown section: skip its numbers up to the next keyword.
       r.warnings.push_back(file + ": line " + std::to_string(c.line_no()) + ": ignored unknown section `" + key + "`");

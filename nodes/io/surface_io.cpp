@@ -372,6 +372,10 @@ RawSurface parse_ply(std::string_view data, const std::string& file) {
   long long nv = 0;
   std::vector<int> idx;
   for (const PlyElement& e : elements) {
+    // An element without properties takes no bytes, so its count cannot be checked against the file: a
+    // forged one (`element x 1000000000000`, fuzzing found it) would spin here for hours.
+    if (e.props.empty() && e.count > 0)
+      throw IOError(file + ": PLY element `" + e.name + "` has " + std::to_string(e.count) + " entries but no properties");
     int xyz[3] = {-1, -1, -1};
     int list = -1;
     if (e.name == "vertex") {
