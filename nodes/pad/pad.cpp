@@ -69,7 +69,133 @@ HexMesh without_hexes(const HexMesh& m, const std::vector<char>& drop) {
   return out;
 }
 
+/// The boundary faces of a mesh: per face its 4 vertices (outward in its hex) and its hex.
+struct BoundaryFaces {
+  std::vector<std::array<int, 4>> quad;
+  std::vector<int> hex;
+  std::vector<int> faces_of_hex;  ///< boundary faces per hex
+};
+
+BoundaryFaces boundary_faces(const HexMesh& m) {
+  using hex_topology::kFaces;
+  struct Face {
+    std::array<int, 4> key;
+    int hex, face;
+    bool operator<(const Face& o) const { return key < o.key; }
+  };
+  std::vector<Face> all;
+  all.reserve(size_t(6 * m.H.rows()));
+  for (Eigen::Index h = 0; h < m.H.rows(); ++h)
+    for (int f = 0; f < 6; ++f) {
+      Face x{{m.H(h, kFaces[f][0]), m.H(h, kFaces[f][1]), m.H(h, kFaces[f][2]), m.H(h, kFaces[f][3])}, int(h), f};
+      std::sort(x.key.begin(), x.key.end());
+      all.push_back(x);
+    }
+  std::sort(all.begin(), all.end());
+  BoundaryFaces b;
+  b.faces_of_hex.assign(size_t(m.H.rows()), 0);
+  for (size_t i = 0; i < all.size();) {
+    size_t j = i + 1;
+    while (j < all.size() && all[j].key == all[i].key) ++j;
+    if (j == i + 1) {
+      const int h = all[i].hex, f = all[i].face;
+      b.quad.push_back({m.H(h, kFaces[f][0]), m.H(h, kFaces[f][1]), m.H(h, kFaces[f][2]), m.H(h, kFaces[f][3])});
+      b.hex.push_back(h);
+      ++b.faces_of_hex[size_t(h)];
+    }
+    i = j;
+  }
+  return b;
+}
+
+int find_root(std::vector<int>& parent, int x) {
+  while (parent[size_t(x)] != x) x = parent[size_t(x)] = parent[size_t(parent[size_t(x)])];
+  return x;
+}
+
 }  // namespace
+
+BoundaryDefects find_boundary_defects(const HexMesh& m) {
+  const BoundaryFaces b = boundary_faces(m);
+  BoundaryDefects d;
+  // boundary edges and the faces on them
+  std::map<std::pair<int, int>, std::vector<int>> edge_faces;
+  for (size_t q = 0; q < b.quad.size(); ++q)
+    for (int k = 0; k < 4; ++k) {
+      const int a = b.quad[q][size_t(k)], c = b.quad[q][size_t((k + 1) % 4)];
+      edge_faces[{std::min(a, c), std::max(a, c)}].push_back(int(q));
+    }
+  for (const auto& [e, faces] : edge_faces)
+    if (faces.size() != 2) d.edges.push_back({e.first, e.second});
+  // per vertex: its boundary faces joined into fans across its manifold edges
+  std::vector<int> parent(b.quad.size());
+  std::vector<std::vector<int>> faces_at(size_t(m.V.rows()));
+  for (size_t q = 0; q < b.quad.size(); ++q)
+    for (int v : b.quad[q]) faces_at[size_t(v)].push_back(int(q));
+  for (size_t v = 0; v < faces_at.size(); ++v) {
+    const auto& fs = faces_at[v];
+    if (fs.size() < 2) continue;
+    for (int q : fs) parent[size_t(q)] = q;
+    for (int q : fs)
+      for (int k = 0; k < 4; ++k) {
+        if (b.quad[size_t(q)][size_t(k)] != int(v)) continue;
+        for (int s : {1, 3}) {  // the two edges of q at v
+          const int w = b.quad[size_t(q)][size_t((k + s) % 4)];
+          const auto& on = edge_faces.at({std::min(int(v), w), std::max(int(v), w)});
+          if (on.size() == 2) parent[size_t(find_root(parent, on[0]))] = find_root(parent, on[1]);
+        }
+      }
+    int fans = 0;
+    for (int q : fs) fans += find_root(parent, q) == q;
+    if (fans > 1) d.vertices.push_back(int(v));
+  }
+  return d;
+}
+
+HexMesh remove_nonmanifold_boundary(const HexMesh& mesh, long* edges, long* vertices, long* removed) {
+  HexMesh cur = mesh;
+  long gone = 0;
+  BoundaryDefects d = find_boundary_defects(cur);
+  if (edges) *edges = long(d.edges.size());
+  if (vertices) *vertices = long(d.vertices.size());
+  for (int round = 0; round < 20 && !(d.edges.empty() && d.vertices.empty()); ++round) {
+    throw_if_interrupted();
+    const BoundaryFaces b = boundary_faces(cur);
+    // per defect, the hex on it with the most boundary faces (the most exposed), then the lowest corner
+    // scaled Jacobian, then the lowest index
+    auto rank = [&](int h) {
+      return std::make_pair(-b.faces_of_hex[size_t(h)], hex_scaled_jacobian(hex_points(cur.V, cur.H, h)).corner_min);
+    };
+    std::vector<char> drop(size_t(cur.H.rows()), 0);
+    auto choose = [&](auto on_defect) {
+      int best = -1;
+      std::pair<int, double> best_rank;
+      for (size_t q = 0; q < b.quad.size(); ++q) {
+        if (!on_defect(b.quad[q])) continue;
+        const int h = b.hex[q];
+        const auto r = rank(h);
+        if (best < 0 || r < best_rank || (r == best_rank && h < best)) best = h, best_rank = r;
+      }
+      if (best >= 0) drop[size_t(best)] = 1;
+    };
+    for (const auto& e : d.edges)
+      choose([&](const std::array<int, 4>& q) {
+        for (int k = 0; k < 4; ++k) {
+          const int a = q[size_t(k)], c = q[size_t((k + 1) % 4)];
+          if ((a == e[0] && c == e[1]) || (a == e[1] && c == e[0])) return true;
+        }
+        return false;
+      });
+    for (int v : d.vertices) choose([&](const std::array<int, 4>& q) { return std::find(q.begin(), q.end(), v) != q.end(); });
+    const long k = long(std::count(drop.begin(), drop.end(), 1));
+    if (k == 0 || k == cur.H.rows()) break;
+    cur = without_hexes(cur, drop);
+    gone += k;
+    d = find_boundary_defects(cur);
+  }
+  if (removed) *removed = gone;
+  return cur;
+}
 
 HexMesh remove_boundary_doublets(const HexMesh& mesh, long* doublets, long* removed) {
   HexMesh cur = mesh;
@@ -151,7 +277,14 @@ HexMesh pad_boundary(const HexMesh& input, const SurfaceMesh* surface, const Pad
   const auto t0 = std::chrono::steady_clock::now();
   check_hex_mesh(input);
   PadStats st;
-  const HexMesh mesh = p.remove_doublets ? remove_boundary_doublets(input, &st.doublets, &st.hexes_removed) : input;
+  HexMesh repaired = p.repair_nonmanifold ? remove_nonmanifold_boundary(input, &st.nonmanifold_edges, &st.nonmanifold_vertices,
+                                                                        &st.nonmanifold_removed)
+                                           : input;
+  const HexMesh mesh = p.remove_doublets ? remove_boundary_doublets(repaired, &st.doublets, &st.hexes_removed) : repaired;
+  {
+    const BoundaryDefects left = find_boundary_defects(mesh);
+    st.nonmanifold_left = long(left.edges.size() + left.vertices.size());
+  }
   const auto Q = hex_boundary_quads(mesh);
   if (Q.rows() == 0) throw InvalidInput((mesh.source.empty() ? std::string("hex mesh") : mesh.source) + ": no boundary quads to pad");
   const Eigen::Index nv = mesh.V.rows(), nh = mesh.H.rows();

@@ -3,6 +3,9 @@
 /// which gives the optimization the freedom the hexes at PolyCube edges and corners lack on smooth parts.
 #pragma once
 
+#include <array>
+#include <vector>
+
 #include "nodes/artefacts/meshes.h"
 
 namespace polyhex {
@@ -11,6 +14,7 @@ struct PadParams {
   double thickness = 0.4;   ///< inward offset of the inner copies, fraction of the local hex edge, (0, 0.9]
   int max_halvings = 10;    ///< halve a vertex's offset at most this often while a hex it touches is inverted, [0, 30]
   bool remove_doublets = true;  ///< first remove hexes at boundary doublets (see remove_boundary_doublets)
+  bool repair_nonmanifold = true;  ///< first remove hexes at non-manifold boundary edges and vertices (remove_nonmanifold_boundary)
 };
 
 struct PadStats {
@@ -20,8 +24,32 @@ struct PadStats {
   long limited = 0;         ///< boundary vertices whose offset had to be reduced
   long doublets = 0;        ///< boundary doublet vertices found in the input (remove_doublets)
   long hexes_removed = 0;   ///< hexes removed to resolve them
+  long nonmanifold_edges = 0, nonmanifold_vertices = 0;  ///< found in the input (repair_nonmanifold)
+  long nonmanifold_removed = 0;  ///< hexes removed to make the boundary manifold
+  long nonmanifold_left = 0;     ///< non-manifold boundary edges + vertices of the result (0 unless the repair gave up)
   double seconds = 0;
 };
+
+/// The non-manifold places of a hex mesh's boundary (faces in one hex only).
+struct BoundaryDefects {
+  std::vector<std::array<int, 2>> edges;  ///< boundary edges not in exactly two boundary faces (sorted pairs)
+  std::vector<int> vertices;  ///< boundary vertices whose boundary faces form more than one fan across their manifold edges
+};
+
+/// Finds the non-manifold boundary edges and vertices: where two sheets of hexes touch along an edge only
+/// (four boundary faces on it) or at a vertex only. Lattice extraction makes them where the PolyCube map
+/// folds; padding cannot extrude them (one inner copy for two sheets) and no vertex placement untangles
+/// the layer hexes there.
+BoundaryDefects find_boundary_defects(const HexMesh& mesh);
+
+/// Removes hexes until the boundary is manifold: per non-manifold edge or vertex, the hex with a boundary
+/// face on it that has the most boundary faces (then the lowest corner scaled Jacobian, then the lowest
+/// index); repeated while defects remain, at most 20 rounds. Unused vertices are dropped.
+/// \param edges, vertices  out (optional): defects found in the input   \param removed  out: hexes removed
+/// \return the mesh without those hexes (a copy of the input if it has no defect)
+/// \throw Interrupted after SIGINT/SIGTERM
+HexMesh remove_nonmanifold_boundary(const HexMesh& mesh, long* edges = nullptr, long* vertices = nullptr,
+                                    long* removed = nullptr);
 
 /// Removes hexes at boundary doublets. A doublet is a boundary vertex in only two boundary quads: they
 /// share both of its boundary edges, so on a smooth surface both are flat (180 degrees) at it, and after
@@ -41,7 +69,9 @@ HexMesh remove_boundary_doublets(const HexMesh& mesh, long* doublets = nullptr, 
 /// For each boundary quad (a, b, c, d), outward in its hex, the new hex is (a', b', c', d', a, b, c, d).
 /// \param mesh     conforming hex mesh, VTK_HEXAHEDRON order
 /// \param surface  the input surface or null; if given, the outer vertices are projected onto it
-/// With p.remove_doublets the hexes at boundary doublets are removed first (remove_boundary_doublets).
+/// With p.repair_nonmanifold the hexes at non-manifold boundary edges and vertices are removed first
+/// (remove_nonmanifold_boundary), then with p.remove_doublets those at boundary doublets
+/// (remove_boundary_doublets).
 /// \return the padded mesh: V = [kept input vertices, inner copies], hexes = [kept input hexes, layer]
 /// \throw InvalidInput when the mesh fails check_hex_mesh or has no boundary
 HexMesh pad_boundary(const HexMesh& mesh, const SurfaceMesh* surface, const PadParams& p = {}, PadStats* stats = nullptr);

@@ -13,7 +13,9 @@ const bool registered = register_node(make_node<P>(
     ParamSet<P>()
         .add("thickness", &P::thickness, "inward offset of the inner layer, fraction of the local hex edge", 1e-3, 0.9)
         .add("max_halvings", &P::max_halvings, "times a vertex's offset may be halved to avoid inverted hexes", 0, 30)
-        .add("remove_doublets", &P::remove_doublets, "first remove hexes at boundary doublets (boundary vertices in 2 quads)"),
+        .add("remove_doublets", &P::remove_doublets, "first remove hexes at boundary doublets (boundary vertices in 2 quads)")
+        .add("repair_nonmanifold", &P::repair_nonmanifold,
+             "first remove hexes at non-manifold boundary edges and vertices (sheets touching along an edge or at a vertex)"),
     {{"hexes", artefact_name<HexMesh>()}, {"surface", artefact_name<SurfaceMesh>(), true}}, artefact_name<HexMesh>(),
     [](const P& p, const Inputs& in, NodeContext& ctx) {
       PadStats s;
@@ -24,12 +26,18 @@ const bool registered = register_node(make_node<P>(
       ctx.metrics["limited"] = s.limited;
       ctx.metrics["doublets"] = s.doublets;
       ctx.metrics["hexes_removed"] = s.hexes_removed;
+      ctx.metrics["nonmanifold_edges"] = s.nonmanifold_edges;
+      ctx.metrics["nonmanifold_vertices"] = s.nonmanifold_vertices;
+      ctx.metrics["nonmanifold_removed"] = s.nonmanifold_removed;
+      ctx.metrics["nonmanifold_left"] = s.nonmanifold_left;
       ctx.metrics["inverted"] = s.inverted;
       ctx.metrics["hexes"] = out.H.rows();
       ctx.metrics["seconds"] = s.seconds;
+      if (s.nonmanifold_left > 0)
+        ctx.warn(std::to_string(s.nonmanifold_left) + " non-manifold boundary edges / vertices left before padding");
       if (s.inverted > 0) ctx.warn(std::to_string(s.inverted) + " hexes inverted after padding (optimize untangles them)");
       return make_artefact(std::move(out));
-    }).with_version("2"));
+    }).with_version("3"));
 
 }  // namespace
 }  // namespace polyhex
