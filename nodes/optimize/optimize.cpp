@@ -659,4 +659,30 @@ HexMesh optimize_hexes(const HexMesh& mesh, const SurfaceMesh& surface, const Op
   return out;
 }
 
+bool better_result(const OptimizeStats& a, const OptimizeStats& b) {
+  if (a.inverted_after != b.inverted_after) return a.inverted_after < b.inverted_after;
+  return a.sj_min_after > b.sj_min_after;
+}
+
+HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback, const SurfaceMesh& surface,
+                                   const OptimizeParams& p, OptimizeStats* stats, OptimizeStats* fallback_stats,
+                                   bool* used_fallback) {
+  OptimizeStats first;
+  HexMesh out = optimize_hexes(mesh, surface, p, &first);
+  bool used = false;
+  if (fallback && first.inverted_after > 0) {
+    OptimizeStats second;
+    HexMesh alt = optimize_hexes(*fallback, surface, p, &second);
+    if (fallback_stats) *fallback_stats = second;
+    if (better_result(second, first)) {
+      out = std::move(alt);
+      first = second;
+      used = true;
+    }
+  }
+  if (stats) *stats = first;
+  if (used_fallback) *used_fallback = used;
+  return out;
+}
+
 }  // namespace polyhex

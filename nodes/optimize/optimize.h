@@ -96,6 +96,20 @@ struct OptimizeStats {
 HexMesh optimize_hexes(const HexMesh& mesh, const SurfaceMesh& surface, const OptimizeParams& p = {},
                        OptimizeStats* stats = nullptr);
 
+/// Whether optimization result a is better than b: fewer inverted hexes, then a higher minimum scaled Jacobian.
+bool better_result(const OptimizeStats& a, const OptimizeStats& b);
+
+/// Optimizes `mesh`; if hexes stay inverted and a fallback mesh is given (the same core padded another way,
+/// e.g. with its poor boundary hexes peeled: pad.h peel_boundary_hexes), optimizes that too and returns the
+/// better result (better_result). Each run has the full time budget.
+/// \param fallback  null, or a second candidate for the same shape
+/// \param stats  out: the kept result's figures   \param fallback_stats  out: the fallback run's (if run)
+/// \param used_fallback  out: whether the fallback's result was kept
+/// \throw as optimize_hexes
+HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback, const SurfaceMesh& surface,
+                                   const OptimizeParams& p, OptimizeStats* stats, OptimizeStats* fallback_stats = nullptr,
+                                   bool* used_fallback = nullptr);
+
 /// Regularised Winslow energy of one hex: Σ over its 8 corners of |J|_F² / (3 χ(det J, ε)^{2/3}), J the
 /// corner's edge vectors divided by `scale`; 8 for a cube of edge `scale` as ε -> 0.
 /// \param p  8 corners in VTK_HEXAHEDRON order

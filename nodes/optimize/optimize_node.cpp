@@ -31,11 +31,25 @@ const bool registered = register_node(make_node<P>(
         .add("move_boundary", &P::move_boundary, "boundary vertices may slide on the surface")
         .add("release_boundary", &P::release_boundary,
              "last resort: boundary corners of hexes still inverted after untangling may leave the surface"),
-    {{"hexes", artefact_name<HexMesh>()}, {"surface", artefact_name<SurfaceMesh>()}}, artefact_name<HexMesh>(),
+    {{"hexes", artefact_name<HexMesh>()},
+     {"surface", artefact_name<SurfaceMesh>()},
+     {"fallback", artefact_name<HexMesh>(), true}},
+    artefact_name<HexMesh>(),
     [](const P& p, const Inputs& in, NodeContext& ctx) {
-      OptimizeStats s;
-      HexMesh out = optimize_hexes(*in.get<HexMesh>(0), *in.get<SurfaceMesh>(1), p, &s);
+      OptimizeStats s, fs;
+      bool used_fallback = false;
+      auto fallback = in.has(2) ? in.get<HexMesh>(2) : nullptr;
+      HexMesh out = optimize_hexes_or_fallback(*in.get<HexMesh>(0), fallback.get(), *in.get<SurfaceMesh>(1), p, &s, &fs,
+                                               &used_fallback);
       auto& j = ctx.metrics;
+      const bool fallback_ran = fallback && fs.seconds > 0;
+      j["fallback_ran"] = fallback_ran;
+      j["fallback_kept"] = used_fallback;
+      if (fallback_ran) {
+        j["fallback_inverted"] = fs.inverted_after;
+        j["fallback_sj_min"] = fs.sj_min_after;
+        j["fallback_seconds"] = fs.seconds;
+      }
       j["sj_min_before"] = s.sj_min_before;
       j["sj_avg_before"] = s.sj_avg_before;
       j["inverted_before"] = s.inverted_before;
@@ -72,7 +86,7 @@ const bool registered = register_node(make_node<P>(
                  std::to_string(s.inverted_before) + " before)");
       if (s.time_budget_hit) ctx.warn("optimization stopped at its time budget of " + std::to_string(p.time_budget) + " s");
       return make_artefact(std::move(out));
-    }).with_version("8"));
+    }).with_version("9"));
 
 }  // namespace
 }  // namespace polyhex

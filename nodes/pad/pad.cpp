@@ -197,6 +197,26 @@ HexMesh remove_nonmanifold_boundary(const HexMesh& mesh, long* edges, long* vert
   return cur;
 }
 
+HexMesh peel_boundary_hexes(const HexMesh& mesh, double max_sj, int rounds, long* removed) {
+  HexMesh cur = mesh;
+  long gone = 0;
+  for (int round = 0; round < rounds; ++round) {
+    throw_if_interrupted();
+    const BoundaryFaces b = boundary_faces(cur);
+    std::vector<char> drop(size_t(cur.H.rows()), 0);
+    tbb::parallel_for(Eigen::Index(0), cur.H.rows(), [&](Eigen::Index h) {
+      if (b.faces_of_hex[size_t(h)] > 0 && hex_scaled_jacobian(hex_points(cur.V, cur.H, h)).corner_min <= max_sj)
+        drop[size_t(h)] = 1;
+    });
+    const long k = long(std::count(drop.begin(), drop.end(), 1));
+    if (k == 0 || k == cur.H.rows()) break;
+    cur = without_hexes(cur, drop);
+    gone += k;
+  }
+  if (removed) *removed = gone;
+  return cur;
+}
+
 HexMesh remove_boundary_doublets(const HexMesh& mesh, long* doublets, long* removed) {
   HexMesh cur = mesh;
   long found = 0, gone = 0;
@@ -277,9 +297,10 @@ HexMesh pad_boundary(const HexMesh& input, const SurfaceMesh* surface, const Pad
   const auto t0 = std::chrono::steady_clock::now();
   check_hex_mesh(input);
   PadStats st;
-  HexMesh repaired = p.repair_nonmanifold ? remove_nonmanifold_boundary(input, &st.nonmanifold_edges, &st.nonmanifold_vertices,
+  const HexMesh peeled = p.peel_rounds > 0 ? peel_boundary_hexes(input, p.peel_sj, p.peel_rounds, &st.peeled) : input;
+  HexMesh repaired = p.repair_nonmanifold ? remove_nonmanifold_boundary(peeled, &st.nonmanifold_edges, &st.nonmanifold_vertices,
                                                                         &st.nonmanifold_removed)
-                                           : input;
+                                           : peeled;
   const HexMesh mesh = p.remove_doublets ? remove_boundary_doublets(repaired, &st.doublets, &st.hexes_removed) : repaired;
   {
     const BoundaryDefects left = find_boundary_defects(mesh);

@@ -14,6 +14,8 @@ struct PadParams {
   double thickness = 0.4;   ///< inward offset of the inner copies, fraction of the local hex edge, (0, 0.9]
   int max_halvings = 10;    ///< halve a vertex's offset at most this often while a hex it touches is inverted, [0, 30]
   bool remove_doublets = true;  ///< first remove hexes at boundary doublets (see remove_boundary_doublets)
+  int peel_rounds = 0;      ///< first remove boundary hexes with corner scaled Jacobian <= peel_sj, this many times, [0, 20]
+  double peel_sj = 0.0;     ///< see peel_rounds, [-1, 0.5]
   bool repair_nonmanifold = true;  ///< first remove hexes at non-manifold boundary edges and vertices (remove_nonmanifold_boundary)
 };
 
@@ -24,6 +26,7 @@ struct PadStats {
   long limited = 0;         ///< boundary vertices whose offset had to be reduced
   long doublets = 0;        ///< boundary doublet vertices found in the input (remove_doublets)
   long hexes_removed = 0;   ///< hexes removed to resolve them
+  long peeled = 0;          ///< poor boundary hexes removed (peel_rounds)
   long nonmanifold_edges = 0, nonmanifold_vertices = 0;  ///< found in the input (repair_nonmanifold)
   long nonmanifold_removed = 0;  ///< hexes removed to make the boundary manifold
   long nonmanifold_left = 0;     ///< non-manifold boundary edges + vertices of the result (0 unless the repair gave up)
@@ -51,6 +54,13 @@ BoundaryDefects find_boundary_defects(const HexMesh& mesh);
 HexMesh remove_nonmanifold_boundary(const HexMesh& mesh, long* edges = nullptr, long* vertices = nullptr,
                                     long* removed = nullptr);
 
+/// Removes the hexes with a boundary face whose corner scaled Jacobian is <= max_sj, `rounds` times (each
+/// round sees the new boundary). The layer that padding adds in their place starts from the surface and is
+/// easier to untangle than a folded hex pressed against it.
+/// \param removed  out (optional): hexes removed   \return the mesh without them (never empty: a round that
+/// would remove every hex is skipped)   \throw Interrupted after SIGINT/SIGTERM
+HexMesh peel_boundary_hexes(const HexMesh& mesh, double max_sj, int rounds, long* removed = nullptr);
+
 /// Removes hexes at boundary doublets. A doublet is a boundary vertex in only two boundary quads: they
 /// share both of its boundary edges, so on a smooth surface both are flat (180 degrees) at it, and after
 /// padding the two layer hexes on them share two faces and one of them is always inverted or flat there
@@ -69,7 +79,8 @@ HexMesh remove_boundary_doublets(const HexMesh& mesh, long* doublets = nullptr, 
 /// For each boundary quad (a, b, c, d), outward in its hex, the new hex is (a', b', c', d', a, b, c, d).
 /// \param mesh     conforming hex mesh, VTK_HEXAHEDRON order
 /// \param surface  the input surface or null; if given, the outer vertices are projected onto it
-/// With p.repair_nonmanifold the hexes at non-manifold boundary edges and vertices are removed first
+/// With p.peel_rounds > 0 the poor boundary hexes are removed first (peel_boundary_hexes); with
+/// p.repair_nonmanifold the hexes at non-manifold boundary edges and vertices are removed first
 /// (remove_nonmanifold_boundary), then with p.remove_doublets those at boundary doublets
 /// (remove_boundary_doublets).
 /// \return the padded mesh: V = [kept input vertices, inner copies], hexes = [kept input hexes, layer]

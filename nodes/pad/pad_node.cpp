@@ -14,6 +14,8 @@ const bool registered = register_node(make_node<P>(
         .add("thickness", &P::thickness, "inward offset of the inner layer, fraction of the local hex edge", 1e-3, 0.9)
         .add("max_halvings", &P::max_halvings, "times a vertex's offset may be halved to avoid inverted hexes", 0, 30)
         .add("remove_doublets", &P::remove_doublets, "first remove hexes at boundary doublets (boundary vertices in 2 quads)")
+        .add("peel_rounds", &P::peel_rounds, "times boundary hexes with corner SJ <= peel_sj are removed first", 0, 20)
+        .add("peel_sj", &P::peel_sj, "see peel_rounds", -1.0, 0.5)
         .add("repair_nonmanifold", &P::repair_nonmanifold,
              "first remove hexes at non-manifold boundary edges and vertices (sheets touching along an edge or at a vertex)"),
     {{"hexes", artefact_name<HexMesh>()}, {"surface", artefact_name<SurfaceMesh>(), true}}, artefact_name<HexMesh>(),
@@ -26,6 +28,7 @@ const bool registered = register_node(make_node<P>(
       ctx.metrics["limited"] = s.limited;
       ctx.metrics["doublets"] = s.doublets;
       ctx.metrics["hexes_removed"] = s.hexes_removed;
+      ctx.metrics["peeled"] = s.peeled;
       ctx.metrics["nonmanifold_edges"] = s.nonmanifold_edges;
       ctx.metrics["nonmanifold_vertices"] = s.nonmanifold_vertices;
       ctx.metrics["nonmanifold_removed"] = s.nonmanifold_removed;
@@ -37,7 +40,7 @@ const bool registered = register_node(make_node<P>(
         ctx.warn(std::to_string(s.nonmanifold_left) + " non-manifold boundary edges / vertices left before padding");
       if (s.inverted > 0) ctx.warn(std::to_string(s.inverted) + " hexes inverted after padding (optimize untangles them)");
       return make_artefact(std::move(out));
-    }).with_version("3"));
+    }).with_version("4"));
 
 }  // namespace
 }  // namespace polyhex

@@ -67,12 +67,12 @@ TEST_CASE("bench: the throughput config, coarse: JSON schema, units, solver figu
   REQUIRE(b["units"].is_object());
   CHECK(b["units"]["tetrahedralize"].get<std::string>().rfind("tets/s", 0) == 0);
 
-  const char* ids[] = {"surface", "tets", "rotate", "segment", "polycube", "hex", "pad", "optimize", "quality", "write"};
+  const char* ids[] = {"surface", "tets", "rotate", "segment", "polycube", "hex", "pad", "pad_peeled", "optimize", "quality", "write"};
   const char* units[] = {"triangles/s", "tets/s", "tets/s", "triangles/s", "tets/s",
-                         "hexes/s", "hexes/s", "hexes/s", "hexes/s", "hexes/s"};
-  REQUIRE(b["nodes"].size() == 10);
+                         "hexes/s", "hexes/s", "hexes/s", "hexes/s", "hexes/s", "hexes/s"};
+  REQUIRE(b["nodes"].size() == 11);
   std::map<std::string, json> by_id;
-  for (size_t i = 0; i < 10; ++i) {
+  for (size_t i = 0; i < 11; ++i) {
     const json& n = b["nodes"][i];
     INFO(ids[i]);
     CHECK(n["id"] == ids[i]);  // config order

@@ -188,7 +188,7 @@ TEST_CASE("sweep: the edge-length sweep writes sweep.csv, sweep.json and one fol
                                           "polycube.edge_length+segment.hex_edge_length=0.045",
                                           "polycube.edge_length+segment.hex_edge_length=0.03"};
   const std::vector<std::string> ids = {"surface", "tets", "rotate", "segment", "polycube",
-                                        "hex", "pad", "optimize", "quality", "write"};
+                                        "hex", "pad", "pad_peeled", "optimize", "quality", "write"};
   // CSV: header, one row per case in case order.
   auto rows = read_csv(out / "sweep.csv");
   REQUIRE(rows.size() == 4);

@@ -121,10 +121,12 @@ TEST_CASE("the optimize node never hands out an inverted hex silently", "[optimi
   // no sweep allowed: the inverted hexes stay, and the node says so in its metrics and warnings
   const NodeSpec* spec = Registry::instance().find("optimize/sj");
   REQUIRE(spec != nullptr);
-  REQUIRE(spec->inputs.size() == 2);
+  REQUIRE(spec->inputs.size() == 3);
   CHECK(spec->inputs[0].name == "hexes");
   CHECK(spec->inputs[1].name == "surface");
   CHECK_FALSE(spec->inputs[1].optional);
+  CHECK(spec->inputs[2].name == "fallback");
+  CHECK(spec->inputs[2].optional);
   HexMesh g = test::grid_hex_mesh(3, 3, 3);
   g.V.row((1 * 4 + 1) * 4 + 1) << 2.4, 2.3, 2.2;
   Inputs in;
@@ -229,4 +231,40 @@ TEST_CASE("whole-hex moves separate two vertices pressed together and keep the b
   const HexMesh same = optimize_hexes(test::grid_hex_mesh(2, 2, 2), test::voxel_surface(test::voxel_box(2, 2, 2)), only, &st2);
   CHECK(st2.element_moves == 0);
   CHECK(same.V == test::grid_hex_mesh(2, 2, 2).V);
+}
+
+TEST_CASE("the fallback mesh is optimized only when hexes stay inverted, and kept only if better", "[optimize]") {
+  const SurfaceMesh s = test::voxel_surface(test::voxel_box(3, 3, 3));
+  HexMesh tangled = test::grid_hex_mesh(3, 3, 3);
+  tangled.V.row((1 * 4 + 1) * 4 + 1) << 2.4, 2.3, 2.2;
+  const HexMesh clean = test::grid_hex_mesh(3, 3, 3);
+  OptimizeParams frozen = no_phases();  // nothing moves: the tangled mesh stays tangled
+  frozen.release_boundary = false;
+  OptimizeStats st, fst;
+  bool used = false;
+  HexMesh out = optimize_hexes_or_fallback(tangled, &clean, s, frozen, &st, &fst, &used);
+  CHECK(used);
+  CHECK(fst.inverted_after == 0);
+  CHECK(st.inverted_after == 0);
+  CHECK(hex_quality(out, nullptr).inverted == 0);
+  CHECK(out.V == clean.V);
+  // a clean first result: the fallback is not run
+  OptimizeStats st2, fst2;
+  fst2.seconds = -1;
+  out = optimize_hexes_or_fallback(clean, &tangled, s, frozen, &st2, &fst2, &used);
+  CHECK_FALSE(used);
+  CHECK(fst2.seconds == -1);  // untouched
+  CHECK(out.V == clean.V);
+  // a worse fallback is not kept
+  out = optimize_hexes_or_fallback(tangled, &tangled, s, frozen, &st2, &fst2, &used);
+  CHECK_FALSE(used);
+  CHECK(st2.inverted_after > 0);
+  // better_result: fewer inverted first, then the higher minimum
+  OptimizeStats a, b;
+  a.inverted_after = 1, a.sj_min_after = 0.9;
+  b.inverted_after = 0, b.sj_min_after = -0.1;
+  CHECK(better_result(b, a));
+  CHECK_FALSE(better_result(a, b));
+  a.inverted_after = 0;
+  CHECK(better_result(a, b));
 }

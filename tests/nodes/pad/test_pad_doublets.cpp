@@ -32,15 +32,18 @@ TEST_CASE("remove_boundary_doublets removes the hex wrapped around a doublet edg
   REQUIRE(r.H.rows() == 1);
   CHECK(r.V.rows() == 8);  // p and q dropped
   CHECK(hex_quality(r, nullptr).inverted == 0);
-  // padding the result gives one hex per boundary quad of the cube, none inverted
+  // padding the result gives one hex per boundary quad of the cube, none inverted (peeling off: the
+  // wrapped hex is inverted, peeling alone would remove it)
+  PadParams no_peel;
+  no_peel.peel_rounds = 0;
   PadStats st;
-  const HexMesh padded = pad_boundary(m, nullptr, {}, &st);
+  const HexMesh padded = pad_boundary(m, nullptr, no_peel, &st);
   CHECK(st.doublets == 2);
   CHECK(st.hexes_removed == 1);
   CHECK(padded.H.rows() == 1 + 6);
   CHECK(st.inverted == 0);
   // off: the pair is padded as it is
-  PadParams keep;
+  PadParams keep = no_peel;
   keep.remove_doublets = false;
   PadStats st2;
   CHECK(pad_boundary(m, nullptr, keep, &st2).H.rows() == 2 + 8);

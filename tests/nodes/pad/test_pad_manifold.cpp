@@ -102,3 +102,28 @@ TEST_CASE("pad_boundary repairs a non-manifold edge first: manifold result, no i
   CHECK(st2.nonmanifold_removed == 0);
   CHECK(st2.nonmanifold_left > 0);  // reported, not silently passed
 }
+
+TEST_CASE("peel_boundary_hexes removes inverted boundary hexes only", "[pad]") {
+  // 4x4x4 cubes; the corner vertex (4,4,4) pushed past (3,3,3) inverts the one corner hex; the centre
+  // vertex (2,2,2) pushed away inverts interior hexes, which peeling must leave
+  HexMesh m = test::grid_hex_mesh(4, 4, 4);
+  auto id = [](int i, int j, int k) { return i + 5 * (j + 5 * k); };
+  m.V.row(id(4, 4, 4)) << 2.8, 2.8, 2.8;
+  m.V.row(id(2, 2, 2)) << 3.5, 2.0, 2.0;
+  Eigen::VectorXd sj, corner;
+  hex_scaled_jacobians(m, sj, corner);
+  const long inverted = long((corner.array() <= 0).count());
+  REQUIRE(inverted >= 2);  // the corner hex and some around the centre
+  long removed = -1;
+  const HexMesh r = peel_boundary_hexes(m, 0.0, 3, &removed);
+  CHECK(removed == 1);
+  CHECK(r.H.rows() == 63);
+  hex_scaled_jacobians(r, sj, corner);
+  CHECK(long((corner.array() <= 0).count()) == inverted - 1);
+  // a bar of cubes whose every hex is inverted: a round that would remove them all is skipped
+  HexMesh bar = test::grid_hex_mesh(2, 1, 1);
+  bar.V.col(0) *= -1.0;  // mirrored: every hex inverted
+  const HexMesh kept = peel_boundary_hexes(bar, 0.0, 3, &removed);
+  CHECK(removed == 0);
+  CHECK(kept.H.rows() == 2);
+}
