@@ -670,7 +670,7 @@ HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback,
   OptimizeStats first;
   HexMesh out = optimize_hexes(mesh, surface, p, &first);
   bool used = false;
-  if (fallback && first.inverted_after > 0) {
+  if (fallback && (first.inverted_after > 0 || first.sj_min_after < p.fallback_below_sj)) {
     OptimizeStats second;
     HexMesh alt = optimize_hexes(*fallback, surface, p, &second);
     if (fallback_stats) *fallback_stats = second;

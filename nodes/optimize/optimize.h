@@ -61,6 +61,7 @@ struct OptimizeParams {
   double time_budget = 60.0;       ///< seconds for the whole stage (checked between colour classes), [0, 1e6]
   bool move_boundary = true;       ///< boundary vertices may slide on the surface
   bool release_boundary = true;    ///< last resort: boundary corners of hexes still inverted after untangling may leave the surface
+  double fallback_below_sj = 0.5;  ///< with a fallback mesh: also optimize it when the first result's minimum scaled Jacobian is below this, [0, 1]
 };
 
 struct OptimizeStats {
@@ -99,9 +100,10 @@ HexMesh optimize_hexes(const HexMesh& mesh, const SurfaceMesh& surface, const Op
 /// Whether optimization result a is better than b: fewer inverted hexes, then a higher minimum scaled Jacobian.
 bool better_result(const OptimizeStats& a, const OptimizeStats& b);
 
-/// Optimizes `mesh`; if hexes stay inverted and a fallback mesh is given (the same core padded another way,
-/// e.g. with its poor boundary hexes peeled: pad.h peel_boundary_hexes), optimizes that too and returns the
-/// better result (better_result). Each run has the full time budget.
+/// Optimizes `mesh`; if a fallback mesh is given (the same core padded another way, e.g. with its inverted
+/// boundary hexes peeled: pad.h peel_boundary_hexes) and the result has inverted hexes or a minimum scaled
+/// Jacobian below p.fallback_below_sj, optimizes the fallback too and returns the better result
+/// (better_result). Each run has the full time budget.
 /// \param fallback  null, or a second candidate for the same shape
 /// \param stats  out: the kept result's figures   \param fallback_stats  out: the fallback run's (if run)
 /// \param used_fallback  out: whether the fallback's result was kept

@@ -30,7 +30,10 @@ const bool registered = register_node(make_node<P>(
         .add("time_budget", &P::time_budget, "seconds for the whole stage", 0.0, 1e6)
         .add("move_boundary", &P::move_boundary, "boundary vertices may slide on the surface")
         .add("release_boundary", &P::release_boundary,
-             "last resort: boundary corners of hexes still inverted after untangling may leave the surface"),
+             "last resort: boundary corners of hexes still inverted after untangling may leave the surface")
+        .add("fallback_below_sj", &P::fallback_below_sj,
+             "with a fallback input: also optimize it when the first result's minimum scaled Jacobian is below this",
+             0.0, 1.0),
     {{"hexes", artefact_name<HexMesh>()},
      {"surface", artefact_name<SurfaceMesh>()},
      {"fallback", artefact_name<HexMesh>(), true}},
@@ -86,7 +89,7 @@ const bool registered = register_node(make_node<P>(
                  std::to_string(s.inverted_before) + " before)");
       if (s.time_budget_hit) ctx.warn("optimization stopped at its time budget of " + std::to_string(p.time_budget) + " s");
       return make_artefact(std::move(out));
-    }).with_version("9"));
+    }).with_version("10"));
 
 }  // namespace
 }  // namespace polyhex

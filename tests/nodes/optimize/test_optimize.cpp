@@ -248,13 +248,32 @@ TEST_CASE("the fallback mesh is optimized only when hexes stay inverted, and kep
   CHECK(st.inverted_after == 0);
   CHECK(hex_quality(out, nullptr).inverted == 0);
   CHECK(out.V == clean.V);
-  // a clean first result: the fallback is not run
+  // a clean first result above fallback_below_sj: the fallback is not run
   OptimizeStats st2, fst2;
   fst2.seconds = -1;
   out = optimize_hexes_or_fallback(clean, &tangled, s, frozen, &st2, &fst2, &used);
   CHECK_FALSE(used);
   CHECK(fst2.seconds == -1);  // untouched
+  // a valid but poor first result (minimum below fallback_below_sj): the fallback runs and wins if better
+  HexMesh poor = clean;
+  for (double t : {0.45, 0.4, 0.35, 0.3, 0.25, 0.2}) {  // squeezed along the diagonal, not inverted
+    poor.V.row((1 * 4 + 1) * 4 + 1) << 1 + t, 1 + t, 1 + t;
+    if (hex_quality(poor, nullptr).inverted == 0) break;
+  }
+  REQUIRE(hex_quality(poor, nullptr).inverted == 0);
+  REQUIRE(hex_quality(poor, nullptr).sj_min < frozen.fallback_below_sj);
+  fst2.seconds = -1;
+  out = optimize_hexes_or_fallback(poor, &clean, s, frozen, &st2, &fst2, &used);
+  CHECK(fst2.seconds >= 0);
+  CHECK(used);
   CHECK(out.V == clean.V);
+  OptimizeParams never = frozen;
+  never.fallback_below_sj = 0;
+  fst2.seconds = -1;
+  out = optimize_hexes_or_fallback(poor, &clean, s, never, &st2, &fst2, &used);
+  CHECK(fst2.seconds == -1);
+  CHECK_FALSE(used);
+  CHECK(out.V == poor.V);
   // a worse fallback is not kept
   out = optimize_hexes_or_fallback(tangled, &tangled, s, frozen, &st2, &fst2, &used);
   CHECK_FALSE(used);
