@@ -72,6 +72,12 @@ class Optimizer {
   }
 
   HexMesh run(const std::string& source) {
+    improve();
+    return finish(source);
+  }
+
+  /// Phases (a) to (b''): untangling, max-min, whole-hex moves, region smoothing.
+  void improve() {
     released_.assign(size_t(V_.rows()), 0);
     // local sweeps first: cheap, they untangle most hexes with little motion
     untangle();
@@ -127,6 +133,10 @@ class Optimizer {
       maxmin();
     }
     smooth_worst();
+  }
+
+  /// Phase (c), the shape improvement, and the result.
+  HexMesh finish(const std::string& source) {
     shape();
     HexMesh out;
     out.V = V_;
@@ -137,6 +147,10 @@ class Optimizer {
         st_.boundary_distance_max = std::max(st_.boundary_distance_max, tree_.distance(V_.row(v).transpose()) / diag_);
     return out;
   }
+
+  /// Inverted hexes and the minimum scaled Jacobian of the current positions.
+  long inverted_now() const { return count_inverted(); }
+  double min_now() const { return sj_min(); }
 
  private:
   /// Last resort: a hex squeezed against the surface (typically at a sharp or concave feature the
@@ -585,10 +599,18 @@ class Optimizer {
   // local minimum nor the local sum of the scaled Jacobians
   void shape() {
     PhaseTimer timer{st_.shape_seconds};
+    double last_avg = -2;
     for (int it = 0; it < p_.shape_iterations && !out_of_time(); ++it) {
       // vertices of hexes below shape_target_sj (a regular grid interior needs no work)
       std::vector<char> all(size_t(V_.rows()), 0);
       const auto q = all_quality();
+      if (it % 2 == 0) {  // converged: a pair of sweeps (Winslow, sum of SJ) raised the average too little
+        double sum = 0;
+        for (const auto& x : q) sum += x.sj;
+        const double avg = H_.rows() > 0 ? sum / double(H_.rows()) : 0.0;
+        if (avg - last_avg < p_.shape_tolerance) break;
+        last_avg = avg;
+      }
       for (Eigen::Index h = 0; h < H_.rows(); ++h)
         if (q[size_t(h)].sj < p_.shape_target_sj)
           for (int k = 0; k < 8; ++k) all[size_t(H_(h, k))] = 1;
@@ -667,20 +689,41 @@ bool better_result(const OptimizeStats& a, const OptimizeStats& b) {
 HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback, const SurfaceMesh& surface,
                                    const OptimizeParams& p, OptimizeStats* stats, OptimizeStats* fallback_stats,
                                    bool* used_fallback) {
-  OptimizeStats first;
-  HexMesh out = optimize_hexes(mesh, surface, p, &first);
+  // Both candidates go through (a)-(b''); the shape improvement (c), which never lowers the minimum nor
+  // un-inverts, runs on the better one only.
+  const auto t0 = Clock::now();
+  check_hex_mesh(mesh);
+  OptimizeStats a, b;
+  summarise(mesh, a.sj_min_before, a.sj_avg_before, a.inverted_before);
+  Optimizer first(mesh, surface, p, a);
+  first.improve();
+  const long inverted_a = first.inverted_now();
+  const double min_a = first.min_now();
   bool used = false;
-  if (fallback && (first.inverted_after > 0 || first.sj_min_after < p.fallback_below_sj)) {
-    OptimizeStats second;
-    HexMesh alt = optimize_hexes(*fallback, surface, p, &second);
-    if (fallback_stats) *fallback_stats = second;
-    if (better_result(second, first)) {
-      out = std::move(alt);
-      first = second;
-      used = true;
-    }
+  std::unique_ptr<Optimizer> second;
+  auto tb = Clock::now();
+  if (fallback && (inverted_a > 0 || min_a < p.fallback_below_sj)) {
+    tb = Clock::now();
+    check_hex_mesh(*fallback);
+    summarise(*fallback, b.sj_min_before, b.sj_avg_before, b.inverted_before);
+    second = std::make_unique<Optimizer>(*fallback, surface, p, b);
+    second->improve();
+    b.seconds = std::chrono::duration<double>(Clock::now() - tb).count();
+    b.inverted_after = second->inverted_now();
+    b.sj_min_after = second->min_now();
+    OptimizeStats at_a;
+    at_a.inverted_after = inverted_a;
+    at_a.sj_min_after = min_a;
+    used = better_result(b, at_a);
   }
-  if (stats) *stats = first;
+  const auto tf = Clock::now();
+  HexMesh out = used ? second->finish(fallback->source) : first.finish(mesh.source);
+  OptimizeStats& kept = used ? b : a;
+  summarise(out, kept.sj_min_after, kept.sj_avg_after, kept.inverted_after);
+  if (used) b.seconds += std::chrono::duration<double>(Clock::now() - tf).count();
+  kept.seconds = std::chrono::duration<double>(Clock::now() - t0).count();  // the whole stage
+  if (stats) *stats = kept;
+  if (fallback_stats && second) *fallback_stats = b;
   if (used_fallback) *used_fallback = used;
   return out;
 }

@@ -35,7 +35,8 @@
 ///      energy would slide them across the surface's creases: L-block volume ratio 0.984 -> 0.972);
 ///  (c) shape improvement, alternating sweeps: every vertex descends the same Winslow energy (ε -> 0) —
 ///      coordinate descent of one global energy — or ascends the sum of its hexes' scaled Jacobians (the
-///      average the report measures).
+///      average the report measures), until a pair of sweeps raises the average by less than
+///      `shape_tolerance`.
 /// A move is accepted only if it does not lower the minimum scaled Jacobian of the vertex's hexes and
 /// inverts none of them (in (c) nor their sum; in (a): it lowers the energy and inverts no further corner). Boundary vertices
 /// (on boundary quads) move along the tangent plane of the surface and are projected back onto it
@@ -55,9 +56,10 @@ struct OptimizeParams {
   int iterations = 30;             ///< max max-min sweeps over all poor hexes (then up to 3x as many over the worst), [0, 10000]
   int element_iterations = 5;       ///< rounds of whole-hex moves (each followed by max-min sweeps), [0, 1000]
   int smooth_iterations = 5;        ///< rounds of region smoothing around the worst hexes (kept while the minimum rises), [0, 1000]
-  int shape_iterations = 10;       ///< global shape-improvement sweeps, [0, 10000]
+  int shape_iterations = 30;       ///< max global shape-improvement sweeps, [0, 10000]
+  double shape_tolerance = 3e-4;   ///< the shape sweeps stop when a pair of them raises the average SJ by less, [0, 1]
   double target_sj = 0.8;          ///< max-min sweeps touch vertices with an incident hex below this SJ, [0, 1]
-  double shape_target_sj = 0.95;   ///< shape sweeps touch vertices with an incident hex below this SJ, [0, 1]
+  double shape_target_sj = 0.99;   ///< shape sweeps touch vertices with an incident hex below this SJ, [0, 1]
   double time_budget = 60.0;       ///< seconds for the whole stage (checked between colour classes), [0, 1e6]
   bool move_boundary = true;       ///< boundary vertices may slide on the surface
   bool release_boundary = true;    ///< last resort: boundary corners of hexes still inverted after untangling may leave the surface
@@ -103,9 +105,11 @@ bool better_result(const OptimizeStats& a, const OptimizeStats& b);
 /// Optimizes `mesh`; if a fallback mesh is given (the same core padded another way, e.g. with its inverted
 /// boundary hexes peeled: pad.h peel_boundary_hexes) and the result has inverted hexes or a minimum scaled
 /// Jacobian below p.fallback_below_sj, optimizes the fallback too and returns the better result
-/// (better_result). Each run has the full time budget.
+/// (better_result). Both go through the untangling and max-min phases, each with the full time budget; the
+/// shape improvement, which never lowers the minimum, runs on the better one only.
+/// \param stats  the kept result's figures, seconds = the whole call
 /// \param fallback  null, or a second candidate for the same shape
-/// \param stats  out: the kept result's figures   \param fallback_stats  out: the fallback run's (if run)
+/// \param fallback_stats  out: the fallback run's figures (if run; after-figures before the shape phase unless kept)
 /// \param used_fallback  out: whether the fallback's result was kept
 /// \throw as optimize_hexes
 HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback, const SurfaceMesh& surface,

@@ -23,7 +23,9 @@ const bool registered = register_node(make_node<P>(
              "rounds of whole-hex moves towards the best-fitting cube, each followed by max-min sweeps", 0, 1000)
         .add("smooth_iterations", &P::smooth_iterations,
              "rounds of region smoothing around the worst hexes, kept while the minimum scaled Jacobian rises", 0, 1000)
-        .add("shape_iterations", &P::shape_iterations, "global shape-improvement sweeps", 0, 10000)
+        .add("shape_iterations", &P::shape_iterations, "max global shape-improvement sweeps", 0, 10000)
+        .add("shape_tolerance", &P::shape_tolerance,
+             "the shape sweeps stop when a pair of them raises the average scaled Jacobian by less", 0.0, 1.0)
         .add("target_sj", &P::target_sj, "max-min sweeps move vertices of hexes below this scaled Jacobian", 0.0, 1.0)
         .add("shape_target_sj", &P::shape_target_sj, "shape sweeps move vertices of hexes below this scaled Jacobian",
              0.0, 1.0)
@@ -89,7 +91,7 @@ const bool registered = register_node(make_node<P>(
                  std::to_string(s.inverted_before) + " before)");
       if (s.time_budget_hit) ctx.warn("optimization stopped at its time budget of " + std::to_string(p.time_budget) + " s");
       return make_artefact(std::move(out));
-    }).with_version("10"));
+    }).with_version("11"));
 
 }  // namespace
 }  // namespace polyhex

@@ -287,3 +287,28 @@ TEST_CASE("the fallback mesh is optimized only when hexes stay inverted, and kep
   a.inverted_after = 0;
   CHECK(better_result(a, b));
 }
+
+TEST_CASE("the shape sweeps raise the average and stop once a pair of them gains less than shape_tolerance", "[optimize]") {
+  const int n = 4;
+  HexMesh g = test::grid_hex_mesh(n, n, n);
+  const SurfaceMesh s = test::voxel_surface(test::voxel_box(n, n, n));
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-0.25, 0.25);
+  for (Eigen::Index v = 0; v < g.V.rows(); ++v)
+    if (!on_box_boundary(g.V.row(v), n))
+      for (int a = 0; a < 3; ++a) g.V(v, a) += u(rng);
+  OptimizeParams p = no_phases();
+  p.shape_iterations = 40;
+  p.shape_tolerance = 1.0;  // no pair of sweeps gains a whole unit: stop after the first pair
+  OptimizeStats one;
+  optimize_hexes(g, s, p, &one);
+  CHECK(one.shape_sweeps == 2);
+  CHECK(one.sj_avg_after > one.sj_avg_before);
+  p.shape_tolerance = 0.0;  // only a pair that gains nothing stops them
+  OptimizeStats many;
+  optimize_hexes(g, s, p, &many);
+  CHECK(many.shape_sweeps > 2);
+  CHECK(many.sj_avg_after > one.sj_avg_after);
+  CHECK(many.sj_min_after >= many.sj_min_before);
+  CHECK(many.inverted_after == 0);
+}
