@@ -10,7 +10,6 @@
 #include <string>
 #include <vector>
 
-#include "nodes/artefacts/hex_topology.h"
 #include "nodes/quality/quality.h"
 #include "nodes/quality/triangle_tree.h"
 #include "runtime/cancel.h"
@@ -69,41 +68,27 @@ HexMesh without_hexes(const HexMesh& m, const std::vector<char>& drop) {
   return out;
 }
 
-/// The boundary faces of a mesh: per face its 4 vertices (outward in its hex) and its hex.
+/// The boundary faces of a mesh (hex_boundary_quads): per face its 4 vertices (outward in its hex) and its
+/// hex; per vertex the faces on it.
 struct BoundaryFaces {
   std::vector<std::array<int, 4>> quad;
   std::vector<int> hex;
-  std::vector<int> faces_of_hex;  ///< boundary faces per hex
+  std::vector<int> faces_of_hex;          ///< boundary faces per hex
+  std::vector<std::vector<int>> faces_at;  ///< boundary faces per vertex
 };
 
 BoundaryFaces boundary_faces(const HexMesh& m) {
-  using hex_topology::kFaces;
-  struct Face {
-    std::array<int, 4> key;
-    int hex, face;
-    bool operator<(const Face& o) const { return key < o.key; }
-  };
-  std::vector<Face> all;
-  all.reserve(size_t(6 * m.H.rows()));
-  for (Eigen::Index h = 0; h < m.H.rows(); ++h)
-    for (int f = 0; f < 6; ++f) {
-      Face x{{m.H(h, kFaces[f][0]), m.H(h, kFaces[f][1]), m.H(h, kFaces[f][2]), m.H(h, kFaces[f][3])}, int(h), f};
-      std::sort(x.key.begin(), x.key.end());
-      all.push_back(x);
-    }
-  std::sort(all.begin(), all.end());
   BoundaryFaces b;
+  const auto Q = hex_boundary_quads(m, &b.hex);
+  b.quad.resize(size_t(Q.rows()));
   b.faces_of_hex.assign(size_t(m.H.rows()), 0);
-  for (size_t i = 0; i < all.size();) {
-    size_t j = i + 1;
-    while (j < all.size() && all[j].key == all[i].key) ++j;
-    if (j == i + 1) {
-      const int h = all[i].hex, f = all[i].face;
-      b.quad.push_back({m.H(h, kFaces[f][0]), m.H(h, kFaces[f][1]), m.H(h, kFaces[f][2]), m.H(h, kFaces[f][3])});
-      b.hex.push_back(h);
-      ++b.faces_of_hex[size_t(h)];
+  b.faces_at.resize(size_t(m.V.rows()));
+  for (Eigen::Index q = 0; q < Q.rows(); ++q) {
+    for (int k = 0; k < 4; ++k) {
+      b.quad[size_t(q)][size_t(k)] = Q(q, k);
+      b.faces_at[size_t(Q(q, k))].push_back(int(q));
     }
-    i = j;
+    ++b.faces_of_hex[size_t(b.hex[size_t(q)])];
   }
   return b;
 }
@@ -129,11 +114,8 @@ BoundaryDefects find_boundary_defects(const HexMesh& m) {
     if (faces.size() != 2) d.edges.push_back({e.first, e.second});
   // per vertex: its boundary faces joined into fans across its manifold edges
   std::vector<int> parent(b.quad.size());
-  std::vector<std::vector<int>> faces_at(size_t(m.V.rows()));
-  for (size_t q = 0; q < b.quad.size(); ++q)
-    for (int v : b.quad[q]) faces_at[size_t(v)].push_back(int(q));
-  for (size_t v = 0; v < faces_at.size(); ++v) {
-    const auto& fs = faces_at[v];
+  for (size_t v = 0; v < b.faces_at.size(); ++v) {
+    const auto& fs = b.faces_at[v];
     if (fs.size() < 2) continue;
     for (int q : fs) parent[size_t(q)] = q;
     for (int q : fs)
@@ -167,26 +149,27 @@ HexMesh remove_nonmanifold_boundary(const HexMesh& mesh, long* edges, long* vert
       return std::make_pair(-b.faces_of_hex[size_t(h)], hex_scaled_jacobian(hex_points(cur.V, cur.H, h)).corner_min);
     };
     std::vector<char> drop(size_t(cur.H.rows()), 0);
-    auto choose = [&](auto on_defect) {
+    // the faces at vertex `at` for which on_defect holds
+    auto choose = [&](int at, auto on_defect) {
       int best = -1;
       std::pair<int, double> best_rank;
-      for (size_t q = 0; q < b.quad.size(); ++q) {
-        if (!on_defect(b.quad[q])) continue;
-        const int h = b.hex[q];
+      for (int q : b.faces_at[size_t(at)]) {
+        if (!on_defect(b.quad[size_t(q)])) continue;
+        const int h = b.hex[size_t(q)];
         const auto r = rank(h);
         if (best < 0 || r < best_rank || (r == best_rank && h < best)) best = h, best_rank = r;
       }
       if (best >= 0) drop[size_t(best)] = 1;
     };
     for (const auto& e : d.edges)
-      choose([&](const std::array<int, 4>& q) {
+      choose(e[0], [&](const std::array<int, 4>& q) {
         for (int k = 0; k < 4; ++k) {
           const int a = q[size_t(k)], c = q[size_t((k + 1) % 4)];
           if ((a == e[0] && c == e[1]) || (a == e[1] && c == e[0])) return true;
         }
         return false;
       });
-    for (int v : d.vertices) choose([&](const std::array<int, 4>& q) { return std::find(q.begin(), q.end(), v) != q.end(); });
+    for (int v : d.vertices) choose(v, [](const std::array<int, 4>&) { return true; });
     const long k = long(std::count(drop.begin(), drop.end(), 1));
     if (k == 0 || k == cur.H.rows()) break;
     cur = without_hexes(cur, drop);
@@ -230,34 +213,23 @@ HexMesh remove_boundary_doublets(const HexMesh& mesh, long* doublets, long* remo
       if (valence[v] > 0 && valence[v] <= 2) doublet[v] = 1, ++n;
     if (round == 0) found = n;
     if (n == 0) break;
-    // boundary faces per hex, and the candidate hex of each doublet
-    const auto Q = hex_boundary_quads(cur);
-    std::map<std::array<int, 4>, int> quad_id;
-    for (Eigen::Index q = 0; q < Q.rows(); ++q) {
-      std::array<int, 4> k = {Q(q, 0), Q(q, 1), Q(q, 2), Q(q, 3)};
-      std::sort(k.begin(), k.end());
-      quad_id[k] = int(q);
-    }
-    using hex_topology::kFaces;
-    std::vector<int> bfaces(size_t(cur.H.rows()), 0);
+    // the candidate hex of each doublet (boundary faces come in (hex, face) order, so hexes in index order)
+    const BoundaryFaces bf = boundary_faces(cur);
+    const std::vector<int>& bfaces = bf.faces_of_hex;
     std::vector<int> best(size_t(cur.V.rows()), -1);
     std::vector<double> best_sj(size_t(cur.V.rows()), 0.0);
-    for (Eigen::Index h = 0; h < cur.H.rows(); ++h) {
+    for (size_t i = 0; i < bf.quad.size();) {
+      const int h = bf.hex[i];
       std::vector<int> touched;
-      for (const auto& f : kFaces) {
-        std::array<int, 4> k = {cur.H(h, f[0]), cur.H(h, f[1]), cur.H(h, f[2]), cur.H(h, f[3])};
-        std::sort(k.begin(), k.end());
-        if (!quad_id.count(k)) continue;
-        ++bfaces[size_t(h)];
-        for (int v : k)
+      for (; i < bf.quad.size() && bf.hex[i] == h; ++i)
+        for (int v : bf.quad[i])
           if (doublet[size_t(v)]) touched.push_back(v);
-      }
       if (touched.empty()) continue;
       const double sj = hex_scaled_jacobian(hex_points(cur.V, cur.H, h)).corner_min;
       for (int v : touched) {
         const int b = best[size_t(v)];
         if (b < 0 || bfaces[size_t(h)] > bfaces[size_t(b)] || (bfaces[size_t(h)] == bfaces[size_t(b)] && sj < best_sj[size_t(v)]))
-          best[size_t(v)] = int(h), best_sj[size_t(v)] = sj;
+          best[size_t(v)] = h, best_sj[size_t(v)] = sj;
       }
     }
     std::vector<char> drop(size_t(cur.H.rows()), 0);

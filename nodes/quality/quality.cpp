@@ -63,8 +63,8 @@ struct FaceRef {
   bool operator<(const FaceRef& o) const { return key < o.key || (key == o.key && id < o.id); }
 };
 
-// Faces used by exactly one hex, in (hex, face) order; counts faces used more than twice.
-RowMatrixX4iQ boundary_faces(const HexMesh& m, long* faces_over_two) {
+// Faces used by exactly one hex, in (hex, face) order; counts faces used more than twice; the hex of each.
+RowMatrixX4iQ boundary_faces(const HexMesh& m, long* faces_over_two, std::vector<int>* hex_of_face = nullptr) {
   const Eigen::Index nh = m.H.rows();
   std::vector<FaceRef> faces(size_t(nh) * 6);
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, nh), [&](const tbb::blocked_range<Eigen::Index>& r) {
@@ -91,6 +91,10 @@ RowMatrixX4iQ boundary_faces(const HexMesh& m, long* faces_over_two) {
   for (size_t i = 0; i < single.size(); ++i)
     for (int k = 0; k < 4; ++k) q(Eigen::Index(i), k) = m.H(single[i] / 6, kFaces[single[i] % 6][k]);
   if (faces_over_two) *faces_over_two = over_two;
+  if (hex_of_face) {
+    hex_of_face->resize(single.size());
+    for (size_t i = 0; i < single.size(); ++i) (*hex_of_face)[i] = single[i] / 6;
+  }
   return q;
 }
 
@@ -261,8 +265,8 @@ double hex_mesh_volume(const HexMesh& mesh) {
   return vol.sum();  // serial sum: the same figure for any thread count
 }
 
-Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> hex_boundary_quads(const HexMesh& mesh) {
-  return boundary_faces(mesh, nullptr);
+Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> hex_boundary_quads(const HexMesh& mesh, std::vector<int>* hex_of_quad) {
+  return boundary_faces(mesh, nullptr, hex_of_quad);
 }
 
 void check_hex_mesh(const HexMesh& mesh) {

@@ -15,6 +15,8 @@
 ///   the triangles), where hexcheck approximates it from the 24 nearest triangle centroids.
 #pragma once
 
+#include <vector>
+
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
@@ -75,8 +77,10 @@ double hex_mesh_volume(const HexMesh& mesh);
 
 /// Boundary quads: hex faces (as vertex sets) used by exactly one hex, in the hex's own vertex
 /// order, which faces outward for a positive hex. Rows in order of (hex, face).
+/// \param hex_of_quad  out (optional): the hex of each row
 /// \return #Q by 4   \pre indices of mesh.H in range
-Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> hex_boundary_quads(const HexMesh& mesh);
+Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> hex_boundary_quads(const HexMesh& mesh,
+                                                                       std::vector<int>* hex_of_quad = nullptr);
 
 /// Checks that a hex mesh can be measured.
 /// \throw InvalidInput when it has no hexes, an index is out of range or a coordinate is not finite
