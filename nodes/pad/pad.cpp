@@ -26,22 +26,6 @@ std::array<Vec3, 8> hex_points(const RowMatrixX3d& V, const RowMatrixX8i& H, Eig
   return p;
 }
 
-/// Boundary quads per vertex; returns the number of boundary edges not in exactly two boundary quads.
-long boundary_valence(const HexMesh& m, std::vector<int>& valence) {
-  const auto Q = hex_boundary_quads(m);
-  valence.assign(size_t(m.V.rows()), 0);
-  std::map<std::pair<int, int>, int> edges;
-  for (Eigen::Index q = 0; q < Q.rows(); ++q)
-    for (int k = 0; k < 4; ++k) {
-      ++valence[size_t(Q(q, k))];
-      const int a = Q(q, k), b = Q(q, (k + 1) % 4);
-      ++edges[{std::min(a, b), std::max(a, b)}];
-    }
-  long bad = 0;
-  for (const auto& e : edges) bad += e.second != 2;
-  return bad;
-}
-
 /// The hexes of m but those flagged, unused vertices dropped.
 HexMesh without_hexes(const HexMesh& m, const std::vector<char>& drop) {
   std::vector<int> map(size_t(m.V.rows()), -1);
@@ -93,6 +77,27 @@ BoundaryFaces boundary_faces(const HexMesh& m) {
   return b;
 }
 
+/// The boundary edges (sorted vertex pairs) and the boundary faces on each.
+std::map<std::pair<int, int>, std::vector<int>> boundary_edges(const BoundaryFaces& b) {
+  std::map<std::pair<int, int>, std::vector<int>> edge_faces;
+  for (size_t q = 0; q < b.quad.size(); ++q)
+    for (int k = 0; k < 4; ++k) {
+      const int a = b.quad[q][size_t(k)], c = b.quad[q][size_t((k + 1) % 4)];
+      edge_faces[{std::min(a, c), std::max(a, c)}].push_back(int(q));
+    }
+  return edge_faces;
+}
+
+/// Boundary quads per vertex; returns the number of boundary edges not in exactly two boundary quads.
+long boundary_valence(const HexMesh& m, std::vector<int>& valence) {
+  const BoundaryFaces b = boundary_faces(m);
+  valence.resize(b.faces_at.size());
+  for (size_t v = 0; v < valence.size(); ++v) valence[v] = int(b.faces_at[v].size());
+  long bad = 0;
+  for (const auto& e : boundary_edges(b)) bad += e.second.size() != 2;
+  return bad;
+}
+
 int find_root(std::vector<int>& parent, int x) {
   while (parent[size_t(x)] != x) x = parent[size_t(x)] = parent[size_t(parent[size_t(x)])];
   return x;
@@ -103,13 +108,7 @@ int find_root(std::vector<int>& parent, int x) {
 BoundaryDefects find_boundary_defects(const HexMesh& m) {
   const BoundaryFaces b = boundary_faces(m);
   BoundaryDefects d;
-  // boundary edges and the faces on them
-  std::map<std::pair<int, int>, std::vector<int>> edge_faces;
-  for (size_t q = 0; q < b.quad.size(); ++q)
-    for (int k = 0; k < 4; ++k) {
-      const int a = b.quad[q][size_t(k)], c = b.quad[q][size_t((k + 1) % 4)];
-      edge_faces[{std::min(a, c), std::max(a, c)}].push_back(int(q));
-    }
+  const auto edge_faces = boundary_edges(b);
   for (const auto& [e, faces] : edge_faces)
     if (faces.size() != 2) d.edges.push_back({e.first, e.second});
   // per vertex: its boundary faces joined into fans across its manifold edges
