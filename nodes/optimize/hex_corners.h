@@ -1,9 +1,12 @@
 /// @file hex_corners.h
 /// @brief Internal to the optimize stage: the corner frames of a VTK_HEXAHEDRON (hex_topology.h) and the regularised
 /// determinant χ of the foldover-free energy (Garanzha et al. 2021), shared by the local sweeps
-/// (optimize.cpp) and the global untangling (untangle_global.cpp).
+/// (optimize.cpp) and the global untangling (untangle_global.cpp), and the regularised Winslow term that the
+/// global untangling and the PolyCube map's untangling (nodes/position_deform/untangle_map.cpp) minimise.
 #pragma once
 
+#include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 
 #include "nodes/artefacts/hex_topology.h"
@@ -15,5 +18,30 @@ using hex_topology::kCorners;
 
 /// χ(D, ε) = (D + sqrt(ε² + D²)) / 2: positive for every D when ε > 0, D for ε -> 0 and D > 0.
 inline double chi(double d, double eps) { return 0.5 * (d + std::sqrt(eps * eps + d * d)); }
+
+/// ε update of Garanzha et al. 2021 after a descent at ε took the energy from e_prev to e and left
+/// `det` as the determinant the schedule follows: shrink with the achieved relative decrease.
+inline double next_eps(double eps, double e, double e_prev, double det) {
+  const double sigma = std::max(1.0 - e / e_prev, 0.1);
+  const double mu = (1.0 - sigma) * chi(det, eps);
+  return det < mu ? 2.0 * std::sqrt(mu * (mu - det)) : 1e-10;
+}
+
+/// |J|_F² / (3 χ(det J, ε)^{2/3}) (1 for a rotation as ε -> 0) and, if dJ, its gradient with respect to J.
+inline double winslow_term(const Eigen::Matrix3d& J, double eps, Eigen::Matrix3d* dJ) {
+  const double D = J.determinant();
+  const double c = chi(D, eps);
+  const double c23 = std::cbrt(c * c);
+  const double n2 = J.squaredNorm();
+  if (dJ) {
+    Eigen::Matrix3d cof;  // d det / dJ
+    cof.col(0) = J.col(1).cross(J.col(2));
+    cof.col(1) = J.col(2).cross(J.col(0));
+    cof.col(2) = J.col(0).cross(J.col(1));
+    const double dchi = 0.5 * (1.0 + D / std::sqrt(eps * eps + D * D));
+    *dJ = (2.0 / (3.0 * c23)) * J - (2.0 / 9.0) * n2 / (c23 * c) * dchi * cof;
+  }
+  return n2 / (3.0 * c23);
+}
 
 }  // namespace polyhex::optimize_detail

@@ -1,6 +1,7 @@
 // Global untangling by L-BFGS on the regularised Winslow energy. See untangle_global.h.
 #include "nodes/optimize/untangle_global.h"
 #include "nodes/optimize/hex_corners.h"
+#include "nodes/artefacts/cell_rings.h"
 #include "nodes/artefacts/hex_topology.h"
 
 #include <tbb/parallel_for.h>
@@ -9,12 +10,12 @@
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <deque>
 #include <limits>
 #include <vector>
 
 #include "nodes/quality/quality.h"
 #include "runtime/cancel.h"
+#include "runtime/lbfgs.h"
 
 namespace polyhex {
 namespace {
@@ -55,24 +56,8 @@ const std::array<Mat83, 9>& weights() {
   return W;
 }
 
-using optimize_detail::chi;
 
-/// |J|² / (3 χ(det J)^{2/3}) and, if dJ, its gradient with respect to J.
-double winslow_term(const Eigen::Matrix3d& J, double eps, Eigen::Matrix3d* dJ) {
-  const double D = J.determinant();
-  const double c = chi(D, eps);
-  const double c23 = std::cbrt(c * c);
-  const double n2 = J.squaredNorm();
-  if (dJ) {
-    Eigen::Matrix3d cof;  // d det / dJ
-    cof.col(0) = J.col(1).cross(J.col(2));
-    cof.col(1) = J.col(2).cross(J.col(0));
-    cof.col(2) = J.col(0).cross(J.col(1));
-    const double dchi = 0.5 * (1.0 + D / std::sqrt(eps * eps + D * D));
-    *dJ = (2.0 / (3.0 * c23)) * J - (2.0 / 9.0) * n2 / (c23 * c) * dchi * cof;
-  }
-  return n2 / (3.0 * c23);
-}
+using optimize_detail::winslow_term;
 
 /// Energy of the hex with corners P (8 by 3, already over the scale) and its gradient G with respect to P.
 double hex_energy(const Mat83& P, double eps, Mat83* G) {
@@ -128,10 +113,7 @@ class GlobalUntangler {
       set_base();
       const double e = energy(VecX::Zero(ndof_), eps, nullptr);
       mindet = min_det();
-      // ε update of Garanzha et al. 2021: shrink with the achieved relative decrease
-      const double sigma = std::max(1.0 - e / e_prev, 0.1);
-      const double mu = (1.0 - sigma) * chi(mindet, eps);
-      eps = mindet < mu ? 2.0 * std::sqrt(mu * (mu - mindet)) : 1e-10;
+      eps = optimize_detail::next_eps(eps, e, e_prev, mindet);
     }
     if (st_.inverted_after == 0) polish();
     return st_.inverted_after;
@@ -172,20 +154,7 @@ class GlobalUntangler {
 
   /// Free vertices: those of the inverted hexes grown by p_.rings rings; active hexes: those with a free vertex.
   void select(const std::vector<char>& inv, Eigen::Index nv, Eigen::Index nh) {
-    std::vector<char> region(size_t(nv), 0);
-    for (Eigen::Index h = 0; h < nh; ++h)
-      if (inv[size_t(h)])
-        for (int k = 0; k < 8; ++k) region[size_t(H_(h, k))] = 1;
-    for (int r = 0; r < p_.rings; ++r) {
-      std::vector<char> grown = region;
-      for (Eigen::Index h = 0; h < nh; ++h) {
-        bool touch = false;
-        for (int k = 0; k < 8 && !touch; ++k) touch = region[size_t(H_(h, k))];
-        if (touch)
-          for (int k = 0; k < 8; ++k) grown[size_t(H_(h, k))] = 1;
-      }
-      region.swap(grown);
-    }
+    const std::vector<char> region = cell_ring_region(H_, nv, p_.rings, [&](Eigen::Index h) { return inv[size_t(h)] != 0; });
     dof_.assign(size_t(nv), -1);
     ndof_ = 0;
     for (Eigen::Index v = 0; v < nv; ++v)
@@ -306,68 +275,23 @@ class GlobalUntangler {
     return ok;
   }
 
-  /// L-BFGS (two-loop recursion, memory 8) with a backtracking Armijo line search, from x. Stops early,
-  /// returning true, when the mesh (projected) is untangled: the later phases improve the quality.
+  /// L-BFGS (runtime/lbfgs.h) from x. Stops early, returning true, when the mesh (projected) is untangled
+  /// (checked every 5 iterations): the later phases improve the quality.
   bool lbfgs(VecX& x, double eps, bool stop_when_untangled, int iterations) {
-    constexpr int kMemory = 8;
-    std::deque<VecX> S, Y;
-    VecX g(ndof_), gn(ndof_);
-    double e = energy(x, eps, &g);
     double mean_scale = 0;
     for (double s : scale_) mean_scale += s;
     mean_scale /= double(scale_.size());
-    for (int it = 0; it < iterations && !out_of_time(); ++it) {
-      throw_if_interrupted();
-      ++st_.lbfgs_iterations;
-      const double gmax = g.lpNorm<Eigen::Infinity>();
-      if (!(gmax > 1e-10 / mean_scale)) return false;
-      VecX d = -g;
-      std::vector<double> alpha(S.size());
-      for (int i = int(S.size()) - 1; i >= 0; --i) {
-        alpha[size_t(i)] = S[size_t(i)].dot(d) / Y[size_t(i)].dot(S[size_t(i)]);
-        d -= alpha[size_t(i)] * Y[size_t(i)];
-      }
-      if (!S.empty()) d *= S.back().dot(Y.back()) / Y.back().squaredNorm();
-      for (size_t i = 0; i < S.size(); ++i) {
-        const double beta = Y[i].dot(d) / Y[i].dot(S[i]);
-        d += (alpha[i] - beta) * S[i];
-      }
-      double slope = g.dot(d);
-      if (!(slope < 0)) {  // not a descent direction: restart from steepest descent
-        S.clear();
-        Y.clear();
-        d = -g;
-        slope = g.dot(d);
-      }
-      // first step of a steepest descent: a tenth of an edge for the largest move
-      double step = S.empty() ? std::min(1.0, 0.1 * mean_scale / d.lpNorm<Eigen::Infinity>()) : 1.0;
-      VecX xn;
-      double en = e;
-      bool ok = false;
-      for (int k = 0; k < 40; ++k, step *= 0.5) {
-        xn = x + step * d;
-        en = energy(xn, eps, nullptr);
-        if (std::isfinite(en) && en <= e + 1e-4 * step * slope) {
-          ok = true;
-          break;
-        }
-      }
-      if (!ok) return false;
-      energy(xn, eps, &gn);
-      VecX s = xn - x, y = gn - g;
-      x = xn;
-      g = gn;
-      const bool converged = e - en <= 1e-12 * std::max(1.0, std::abs(e));
-      e = en;
-      if (s.dot(y) > 1e-16 * s.norm() * y.norm()) {
-        S.push_back(std::move(s));
-        Y.push_back(std::move(y));
-        if (int(S.size()) > kMemory) S.pop_front(), Y.pop_front();
-      }
-      if (converged) break;
-      if (stop_when_untangled && it % 5 == 4 && untangled_at(x)) return true;
-    }
-    return false;
+    LbfgsOptions o;
+    o.iterations = iterations;
+    o.gradient_tol = 1e-10 / mean_scale;
+    o.first_move = 0.1 * mean_scale;
+    auto stop = [&](int done, const VecX& y, bool after_step) {
+      if (!after_step) return out_of_time();
+      return stop_when_untangled && done % 5 == 0 && untangled_at(y);
+    };
+    return lbfgs_minimize(x, [&](const VecX& y, VecX* g) { return energy(y, eps, g); }, o, stop, &st_.lbfgs_iterations) ==
+               LbfgsEnd::Stopped &&
+           !st_.time_budget_hit;
   }
 
   RowMatrixX3d& V_;

@@ -1,0 +1,96 @@
+/// @file lbfgs.h
+/// @brief Limited-memory BFGS (two-loop recursion, memory 8) with a backtracking Armijo line search, for
+/// the foldover-free energies of the untangling steps (the hex mesh in nodes/optimize, the PolyCube map
+/// in nodes/position_deform). The energies are finite everywhere (regularised determinant), so the line
+/// search only needs finite values; it halves the step up to 40 times.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cmath>
+#include <deque>
+#include <vector>
+
+#include "runtime/cancel.h"
+
+namespace polyhex {
+
+struct LbfgsOptions {
+  int iterations = 200;     ///< at most this many iterations
+  double gradient_tol = 0;  ///< stop (Stalled) when max |g_i| <= this
+  double first_move = 1;    ///< a steepest-descent step moves no unknown by more than this
+};
+
+enum class LbfgsEnd {
+  Iterations,  ///< used all iterations
+  Converged,   ///< the energy decreased by less than 1e-12 (relative)
+  Stalled,     ///< gradient below tolerance, or no step decreased the energy
+  Stopped      ///< `stop` returned true
+};
+
+/// Minimises f from x (updated in place). `f(x, g)` returns the energy at x and, when g is not null, writes
+/// its gradient (g has x's size). `stop(done, x, after_step)` is asked before every iteration
+/// (after_step false) and after each accepted step (after_step true, done counting this step), with
+/// done = the iterations done; true ends the run. `count` (if not null) is incremented per iteration. Checks SIGINT/SIGTERM per iteration.
+/// \throw Interrupted (runtime/cancel.h)
+template <class Energy, class Stop>
+LbfgsEnd lbfgs_minimize(Eigen::VectorXd& x, Energy&& f, const LbfgsOptions& o, Stop&& stop, long* count = nullptr) {
+  using VecX = Eigen::VectorXd;
+  constexpr int kMemory = 8;
+  std::deque<VecX> S, Y;
+  VecX g(x.size()), gn(x.size());
+  double e = f(x, &g);
+  for (int it = 0; it < o.iterations; ++it) {
+    if (stop(it, x, false)) return LbfgsEnd::Stopped;
+    throw_if_interrupted();
+    if (count) ++*count;
+    const double gmax = g.lpNorm<Eigen::Infinity>();
+    if (!(gmax > o.gradient_tol)) return LbfgsEnd::Stalled;
+    VecX d = -g;
+    std::vector<double> alpha(S.size());
+    for (int i = int(S.size()) - 1; i >= 0; --i) {
+      alpha[size_t(i)] = S[size_t(i)].dot(d) / Y[size_t(i)].dot(S[size_t(i)]);
+      d -= alpha[size_t(i)] * Y[size_t(i)];
+    }
+    if (!S.empty()) d *= S.back().dot(Y.back()) / Y.back().squaredNorm();
+    for (size_t i = 0; i < S.size(); ++i) {
+      const double beta = Y[i].dot(d) / Y[i].dot(S[i]);
+      d += (alpha[i] - beta) * S[i];
+    }
+    double slope = g.dot(d);
+    if (!(slope < 0)) {  // not a descent direction: restart from steepest descent
+      S.clear();
+      Y.clear();
+      d = -g;
+      slope = g.dot(d);
+    }
+    double step = S.empty() ? std::min(1.0, o.first_move / d.lpNorm<Eigen::Infinity>()) : 1.0;
+    VecX xn;
+    double en = e;
+    bool ok = false;
+    for (int k = 0; k < 40; ++k, step *= 0.5) {  // the gradient comes with each trial: most first trials pass
+      xn = x + step * d;
+      en = f(xn, &gn);
+      if (std::isfinite(en) && en <= e + 1e-4 * step * slope) {
+        ok = true;
+        break;
+      }
+    }
+    if (!ok) return LbfgsEnd::Stalled;
+    VecX s = xn - x, y = gn - g;
+    x = xn;
+    g = gn;
+    const bool converged = e - en <= 1e-12 * std::max(1.0, std::abs(e));
+    e = en;
+    if (s.dot(y) > 1e-16 * s.norm() * y.norm()) {
+      S.push_back(std::move(s));
+      Y.push_back(std::move(y));
+      if (int(S.size()) > kMemory) S.pop_front(), Y.pop_front();
+    }
+    if (converged) return LbfgsEnd::Converged;
+    if (stop(it + 1, x, true)) return LbfgsEnd::Stopped;
+  }
+  return LbfgsEnd::Iterations;
+}
+
+}  // namespace polyhex
