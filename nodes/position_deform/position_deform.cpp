@@ -1,4 +1,5 @@
 #include "nodes/position_deform/position_deform.h"
+#include "nodes/position_deform/untangle_map.h"
 
 #include <Eigen/Dense>
 #include <Eigen/IterativeLinearSolvers>
@@ -511,6 +512,28 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
     st.planarity_error = std::max(st.planarity_error, s.planarity_error);
     st.seconds_poisson += s.seconds_poisson;
     st.seconds_final += s.seconds_final;
+  }
+
+  // Untangling (untangle_map.h): a vertex keeps the coordinates of the chart planes it lies on.
+  if (p.untangle_iterations > 0) {
+    std::vector<std::uint8_t> fixed_axes(size_t(nV), 0);
+    for (Eigen::Index f = 0; f < seg.F.rows(); ++f) {
+      const int a = label_axis(seg.charts[size_t(seg.chart[f])].label);
+      for (int k = 0; k < 3; ++k) fixed_axes[size_t(seg.F(f, k))] |= std::uint8_t(1 << a);
+    }
+    MapUntangleParams up;
+    up.max_iterations = p.untangle_iterations;
+    up.rings = p.untangle_rings;
+    up.seconds = p.untangle_seconds;
+    MapUntangleStats us;
+    untangle_polycube_map(input.V, input.T, out.U, fixed_axes, up, &us);
+    st.inverted_tets_before_untangle = us.inverted_before;
+    st.untangle_free_vertices = us.free_vertices;
+    st.flat_tets = us.flat;
+    st.untangle_lbfgs_iterations = us.lbfgs_iterations;
+    st.untangle_polish_iterations = us.polish_iterations;
+    st.untangle_time_budget_hit = us.time_budget_hit;
+    st.seconds_untangle = us.seconds;
   }
 
   // Inverted tets and distortion of input -> PolyCube. A few near-degenerate tets have distortions of

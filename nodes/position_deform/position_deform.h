@@ -25,6 +25,8 @@
 ///     a Laplace equation discretised with mean value coordinates, 2D on the surface, 3D in the volume,
 ///     weights computed on the deformed mesh) or "poisson" (step 1's energy with the charts pinned,
 ///     which keeps more of the deformed shape).
+///  5. Beyond the paper: the folds of the map (inverted tets) are untangled with the chart planes kept
+///     (untangle_map.h), so that the hex stage maps every lattice point through a positive tet.
 #pragma once
 
 #include <memory>
@@ -38,6 +40,9 @@ struct PositionDeformParams {
   double edge_length = 0.01;        ///< hex edge length h, fraction of the input's bbox diagonal (§6: 1 %), [1e-4, 0.5]
   double distance_weight = 1.0;     ///< scale s of the distance-preservation constraints (0 disables them), [0, 1e6]
   std::string final_solve = "mvc_laplace";  ///< "mvc_laplace" (§5.2) or "poisson"
+  int untangle_iterations = 600;    ///< L-BFGS iterations of the map's untangling (untangle_map.h); 0 = keep the folds, [0, 1e6]
+  int untangle_rings = 2;           ///< the untangling moves the inverted tets' vertices grown by this many rings, [0, 50]
+  double untangle_seconds = 0;      ///< wall-time cap of the untangling (0 = none; a cap that is hit makes runs load-dependent), [0, 3600]
   double max_hexes = 2e7;           ///< refuse up front when the hex count estimate (volume / h³) exceeds this, [1e3, 2e9]
 };
 
@@ -50,7 +55,14 @@ struct PositionDeformStats {
   int order_constraints_dropped = 0;    ///< ordered pairs dropped because they contradict stronger evidence (a cycle)
   int merged_same_axis_charts = 0;      ///< same-axis charts sharing a vertex, forced onto one plane
   double chart_coordinates_rounded_max_shift = 0;  ///< max |c − k h| / h over charts
-  int inverted_tets = 0;                ///< tets of the PolyCube map with signed volume <= 0 (expected at concave edges, Fig. 9)
+  int inverted_tets = 0;                ///< tets of the PolyCube map with signed volume <= 0 (after the untangling)
+  long inverted_tets_before_untangle = 0;  ///< the same, as the final solve leaves them (concave edges, Fig. 9)
+  long untangle_free_vertices = 0;
+  long flat_tets = 0;                   ///< inverted tets with their 4 vertices on one chart plane (untangle_map.h)
+  long untangle_lbfgs_iterations = 0;    ///< L-BFGS iterations of the untangling rounds (<= untangle_iterations)
+  long untangle_polish_iterations = 0;   ///< and of its polish
+  bool untangle_time_budget_hit = false;
+  double seconds_untangle = 0;
   double distortion = 0;                ///< median conformal distortion ||J||_F ||J^-1||_F / 3 (input -> PolyCube) of non-inverted tets
   double distortion_p99 = 0;            ///< its 99th percentile
   double distortion_max = 0;

@@ -17,6 +17,9 @@ const bool registered = register_node(make_node<P>(
         .add("distance_weight", &P::distance_weight, "scale of the same-axis chart distance constraints (0 = off)", 0.0, 1e6)
         .add_choice("final_solve", &P::final_solve, {"mvc_laplace", "poisson"},
                     "final solve with pinned charts: mean value Laplace (paper) or Poisson")
+        .add("untangle_iterations", &P::untangle_iterations, "L-BFGS iterations of the map's untangling (0 = keep the folds)", 0, 1000000)
+        .add("untangle_rings", &P::untangle_rings, "the untangling moves the inverted tets' vertices grown by this many rings", 0, 50)
+        .add("untangle_seconds", &P::untangle_seconds, "wall-time cap of the untangling (0 = none)", 0.0, 3600.0)
         .add("max_hexes", &P::max_hexes, "refuse up front when volume / h^3 exceeds this", 1e3, 2e9),
     {{"tets", artefact_name<TetMesh>()},
      {"deformed", artefact_name<TetMesh>()},
@@ -35,6 +38,13 @@ const bool registered = register_node(make_node<P>(
       j["merged_same_axis_charts"] = s.merged_same_axis_charts;
       j["chart_coordinates_rounded_max_shift"] = s.chart_coordinates_rounded_max_shift;
       j["inverted_tets"] = s.inverted_tets;
+      j["inverted_tets_before_untangle"] = s.inverted_tets_before_untangle;
+      j["untangle_free_vertices"] = s.untangle_free_vertices;
+      j["flat_tets"] = s.flat_tets;
+      j["untangle_lbfgs_iterations"] = s.untangle_lbfgs_iterations;
+      j["untangle_polish_iterations"] = s.untangle_polish_iterations;
+      j["untangle_time_budget_hit"] = s.untangle_time_budget_hit;
+      j["seconds_untangle"] = s.seconds_untangle;
       j["distortion"] = s.distortion;
       j["distortion_p99"] = s.distortion_p99;
       j["distortion_max"] = s.distortion_max;
@@ -47,7 +57,7 @@ const bool registered = register_node(make_node<P>(
       if (s.merged_same_axis_charts > 0)
         ctx.warn(std::to_string(s.merged_same_axis_charts) + " same-axis charts share a vertex and were put on one plane");
       return make_artefact(std::move(m));
-    }));
+    }).with_version("2"));
 
 // --save-all writes the PolyCube map as the tet mesh at its PolyCube positions (<id>.polycube.vtk) and
 // the PolyCube surface with chart ids and labels as cell data (<id>.polycube_surface.vtk).

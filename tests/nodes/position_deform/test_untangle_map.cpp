@@ -1,0 +1,143 @@
+// Untangling of the PolyCube map: folds undone, chart planes kept exactly, flat tets left alone.
+#include <catch2/catch.hpp>
+
+#include <Eigen/Dense>
+#include <array>
+#include <map>
+
+#include "nodes/position_deform/untangle_map.h"
+
+using namespace polyhex;
+
+namespace {
+
+/// The cube [0,n]^3 as a grid of unit cubes, each split into 6 tets along its main diagonal (Kuhn), all
+/// positively oriented; fixed_axes marks the coordinates a boundary vertex keeps (the box's face planes).
+struct Grid {
+  RowMatrixX3d X;
+  RowMatrixX4i T;
+  std::vector<std::uint8_t> fixed;
+  int n = 0;
+  int id(int i, int j, int k) const { return (i * (n + 1) + j) * (n + 1) + k; }
+};
+
+Grid grid(int n) {
+  Grid g;
+  g.n = n;
+  const int nv = (n + 1) * (n + 1) * (n + 1);
+  g.X.resize(nv, 3);
+  g.fixed.assign(size_t(nv), 0);
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n; ++j)
+      for (int k = 0; k <= n; ++k) {
+        const int v = g.id(i, j, k);
+        g.X.row(v) << i, j, k;
+        const int c[3] = {i, j, k};
+        for (int a = 0; a < 3; ++a)
+          if (c[a] == 0 || c[a] == n) g.fixed[size_t(v)] |= std::uint8_t(1 << a);
+      }
+  std::vector<std::array<int, 4>> tets;
+  const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      for (int k = 0; k < n; ++k)
+        for (const auto& p : perms) {
+          int c[3] = {i, j, k};
+          std::array<int, 4> t;
+          t[0] = g.id(c[0], c[1], c[2]);
+          for (int s = 0; s < 3; ++s) {
+            ++c[p[s]];
+            t[size_t(s + 1)] = g.id(c[0], c[1], c[2]);
+          }
+          const Eigen::Vector3d a = g.X.row(t[0]);
+          const double vol = (Eigen::Vector3d(g.X.row(t[1])) - a)
+                                 .dot((Eigen::Vector3d(g.X.row(t[2])) - a).cross(Eigen::Vector3d(g.X.row(t[3])) - a));
+          if (vol < 0) std::swap(t[2], t[3]);
+          tets.push_back(t);
+        }
+  g.T.resize(Eigen::Index(tets.size()), 4);
+  for (size_t t = 0; t < tets.size(); ++t)
+    for (int k = 0; k < 4; ++k) g.T(Eigen::Index(t), k) = tets[t][size_t(k)];
+  return g;
+}
+
+long inverted(const RowMatrixX3d& U, const RowMatrixX4i& T) {
+  long n = 0;
+  for (Eigen::Index t = 0; t < T.rows(); ++t) {
+    const Eigen::Vector3d a = U.row(T(t, 0));
+    n += (Eigen::Vector3d(U.row(T(t, 1))) - a).dot((Eigen::Vector3d(U.row(T(t, 2))) - a).cross(Eigen::Vector3d(U.row(T(t, 3))) - a)) <= 0;
+  }
+  return n;
+}
+
+/// Every boundary vertex keeps its fixed coordinates bit for bit.
+void check_planes_kept(const Grid& g, const RowMatrixX3d& U0, const RowMatrixX3d& U) {
+  for (Eigen::Index v = 0; v < U.rows(); ++v)
+    for (int a = 0; a < 3; ++a)
+      if (g.fixed[size_t(v)] >> a & 1) REQUIRE(U(v, a) == U0(v, a));
+}
+
+}  // namespace
+
+TEST_CASE("an interior fold of the map is untangled, the box's planes do not move", "[position][untangle]") {
+  Grid g = grid(4);
+  RowMatrixX3d U = g.X;
+  U.row(g.id(2, 2, 2)) += Eigen::RowVector3d(1.6, 0.4, -0.3);  // past its neighbours: a fold
+  const RowMatrixX3d U0 = U;
+  const long before = inverted(U, g.T);
+  REQUIRE(before > 0);
+  MapUntangleStats st;
+  const long left = untangle_polycube_map(g.X, g.T, U, g.fixed, MapUntangleParams{}, &st);
+  CHECK(left == 0);
+  CHECK(inverted(U, g.T) == 0);
+  CHECK(st.inverted_before == before);
+  CHECK(st.flat == 0);
+  CHECK(st.free_vertices > 1);
+  check_planes_kept(g, U0, U);
+}
+
+TEST_CASE("a chart vertex folded in its plane slides back, keeping the plane", "[position][untangle]") {
+  Grid g = grid(4);
+  RowMatrixX3d U = g.X;
+  const int v = g.id(0, 2, 2);  // on the plane x = 0, free in y and z
+  U.row(v) += Eigen::RowVector3d(0, 1.5, 0.4);
+  const RowMatrixX3d U0 = U;
+  REQUIRE(inverted(U, g.T) > 0);
+  const long left = untangle_polycube_map(g.X, g.T, U, g.fixed);
+  CHECK(left == 0);
+  CHECK(inverted(U, g.T) == 0);
+  check_planes_kept(g, U0, U);
+  CHECK(U(v, 0) == 0.0);
+  CHECK(U(v, 1) < 3.0);  // it moved back between its neighbours
+}
+
+TEST_CASE("with no rounds the map is left as it is", "[position][untangle]") {
+  Grid g = grid(3);
+  RowMatrixX3d U = g.X;
+  U.row(g.id(1, 1, 1)) += Eigen::RowVector3d(1.5, 0, 0);
+  const RowMatrixX3d U0 = U;
+  MapUntangleParams p;
+  p.rounds = 0;
+  MapUntangleStats st;
+  const long left = untangle_polycube_map(g.X, g.T, U, g.fixed, p, &st);
+  CHECK(left == inverted(U0, g.T));
+  CHECK(left > 0);
+  CHECK(U == U0);
+  CHECK(st.lbfgs_iterations == 0);
+}
+
+TEST_CASE("a tet with its four vertices on one chart plane is flat: counted, left out, nothing moves for it", "[position][untangle]") {
+  RowMatrixX3d X(4, 3);
+  X << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1;
+  RowMatrixX4i T(1, 4);
+  T << 0, 1, 2, 3;
+  RowMatrixX3d U = X;
+  U(3, 2) = 0;  // all four on the plane z = 0
+  const std::vector<std::uint8_t> fixed(4, std::uint8_t(4));
+  const RowMatrixX3d U0 = U;
+  MapUntangleStats st;
+  CHECK(untangle_polycube_map(X, T, U, fixed, MapUntangleParams{}, &st) == 1);
+  CHECK(st.flat == 1);
+  CHECK(st.free_vertices == 0);
+  CHECK(U == U0);
+}
