@@ -2,7 +2,7 @@
 /// @brief Limited-memory BFGS (two-loop recursion, memory 8) with a backtracking Armijo line search, for
 /// the foldover-free energies of the untangling steps (the hex mesh in nodes/optimize, the PolyCube map
 /// in nodes/position_deform). The energies are finite everywhere (regularised determinant), so the line
-/// search only needs finite values; it halves the step up to 40 times.
+/// search only needs finite values; it halves the step up to `max_halvings` times.
 #pragma once
 
 #include <Eigen/Core>
@@ -19,6 +19,7 @@ struct LbfgsOptions {
   int iterations = 200;     ///< at most this many iterations
   double gradient_tol = 0;  ///< stop (Stalled) when max |g_i| <= this
   double first_move = 1;    ///< a steepest-descent step moves no unknown by more than this
+  int max_halvings = 40;    ///< the line search gives up (Stalled) after halving the step this many times
 };
 
 enum class LbfgsEnd {
@@ -68,7 +69,7 @@ LbfgsEnd lbfgs_minimize(Eigen::VectorXd& x, Energy&& f, const LbfgsOptions& o, S
     VecX xn;
     double en = e;
     bool ok = false;
-    for (int k = 0; k < 40; ++k, step *= 0.5) {  // the gradient comes with each trial: most first trials pass
+    for (int k = 0; k < o.max_halvings; ++k, step *= 0.5) {  // the gradient comes with each trial: most first trials pass
       xn = x + step * d;
       en = f(xn, &gn);
       if (std::isfinite(en) && en <= e + 1e-4 * step * slope) {

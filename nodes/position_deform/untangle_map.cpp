@@ -67,8 +67,12 @@ class MapUntangler {
                                  &st_.lbfgs_iterations) == LbfgsEnd::Stopped &&
                   !st_.time_budget_hit;
       apply(x);
+      const long before_round = st_.inverted_after;
       st_.inverted_after = count_inverted() + st_.flat;
       if (untangled || st_.inverted_after == st_.flat) break;
+      // a round that turns no tet round will not be followed by one that does: what is left is stuck (its
+      // vertices pinned by the chart planes) or a sliver the schedule ignores, and ε is at its floor
+      if (st_.inverted_after >= before_round) break;
       set_base();
       const double e = energy(VecX::Zero(ndof_), eps, nullptr);
       mindet = min_det();
@@ -118,6 +122,7 @@ class MapUntangler {
     o.iterations = iterations;
     o.gradient_tol = 1e-10 / mean_edge_;
     o.first_move = 0.1 * mean_edge_;
+    o.max_halvings = 12;  // a step 4096 times below the first trial moves nothing: the round has stalled
     return o;
   }
 
