@@ -1,0 +1,88 @@
+// L-BFGS helper: analytic minimisers, the stop callback's contract, the line search's give-up.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <vector>
+
+#include "runtime/lbfgs.h"
+
+using namespace polyhex;
+
+TEST_CASE("lbfgs finds the minimiser of an ill-conditioned quadratic and of Rosenbrock's function", "[lbfgs]") {
+  // f = Σ a_i (x_i - i)², a from 1 to 1e4: minimiser x_i = i
+  const int n = 20;
+  auto quad = [&](const Eigen::VectorXd& x, Eigen::VectorXd* g) {
+    double f = 0;
+    for (int i = 0; i < n; ++i) {
+      const double a = std::pow(10.0, 4.0 * i / (n - 1)), d = x[i] - i;
+      f += a * d * d;
+      if (g) (*g)[i] = 2 * a * d;
+    }
+    return f;
+  };
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
+  LbfgsOptions o;
+  o.iterations = 2000;
+  o.gradient_tol = 1e-10;
+  long count = 0;
+  const LbfgsEnd end = lbfgs_minimize(x, quad, o, [](int, const Eigen::VectorXd&, bool) { return false; }, &count);
+  CHECK(end != LbfgsEnd::Iterations);
+  for (int i = 0; i < n; ++i) CHECK(x[i] == Approx(double(i)).margin(1e-5));
+  CHECK(count > 0);
+  CHECK(count < 2000);
+
+  auto rosen = [](const Eigen::VectorXd& y, Eigen::VectorXd* g) {
+    const double a = 1 - y[0], b = y[1] - y[0] * y[0];
+    if (g) (*g) << -2 * a - 400 * y[0] * b, 200 * b;
+    return a * a + 100 * b * b;
+  };
+  Eigen::VectorXd r(2);
+  r << -1.2, 1.0;
+  o.first_move = 0.1;
+  lbfgs_minimize(r, rosen, o, [](int, const Eigen::VectorXd&, bool) { return false; });
+  CHECK(r[0] == Approx(1.0).margin(1e-4));
+  CHECK(r[1] == Approx(1.0).margin(1e-4));
+}
+
+TEST_CASE("lbfgs asks stop before each iteration and after each step, and ends when it says so", "[lbfgs]") {
+  // ill-conditioned: not solved in 3 steps
+  const Eigen::Vector3d a(1.0, 30.0, 900.0);
+  auto f = [&](const Eigen::VectorXd& x, Eigen::VectorXd* g) {
+    if (g) *g = 2 * a.cwiseProduct(x);
+    return x.dot(a.cwiseProduct(x));
+  };
+  Eigen::VectorXd x = Eigen::VectorXd::Constant(3, 5.0);
+  std::vector<std::pair<int, bool>> calls;
+  LbfgsOptions o;
+  o.iterations = 100;
+  long count = 0;
+  const LbfgsEnd end = lbfgs_minimize(x, f, o, [&](int done, const Eigen::VectorXd&, bool after) {
+    calls.push_back({done, after});
+    return after && done == 3;
+  }, &count);
+  CHECK(end == LbfgsEnd::Stopped);
+  CHECK(count == 3);
+  REQUIRE(calls.size() == 6);
+  for (int k = 0; k < 3; ++k) {
+    CHECK(calls[size_t(2 * k)] == std::make_pair(k, false));
+    CHECK(calls[size_t(2 * k + 1)] == std::make_pair(k + 1, true));
+  }
+}
+
+TEST_CASE("lbfgs stalls, x unchanged, when no step decreases the energy within max_halvings", "[lbfgs]") {
+  // the gradient points uphill: no step along -g lowers f
+  auto liar = [](const Eigen::VectorXd& x, Eigen::VectorXd* g) {
+    if (g) *g = -2 * x;
+    return x.squaredNorm();
+  };
+  Eigen::VectorXd x = Eigen::VectorXd::Constant(2, 1.0);
+  const Eigen::VectorXd x0 = x;
+  int evals = 0;
+  LbfgsOptions o;
+  o.max_halvings = 5;
+  const LbfgsEnd end = lbfgs_minimize(x, [&](const Eigen::VectorXd& y, Eigen::VectorXd* g) { ++evals; return liar(y, g); },
+                                      o, [](int, const Eigen::VectorXd&, bool) { return false; });
+  CHECK(end == LbfgsEnd::Stalled);
+  CHECK(x == x0);
+  CHECK(evals == 1 + 5);  // the start, then one per halving
+}
