@@ -1,11 +1,12 @@
 /// @file cell_rings.h
 /// @brief Vertex regions of a cell mesh (tets or hexes, one row of vertex indices per cell) grown by rings of
-/// cells: the free vertices of the untangling steps (nodes/optimize/untangle_global.cpp for hexes,
+/// cells, and the cells at each vertex of a region: the free vertices of the untangling steps (nodes/optimize/untangle_global.cpp for hexes,
 /// nodes/position_deform/untangle_map.cpp for the PolyCube map's tets).
 #pragma once
 
 #include <Eigen/Core>
 
+#include <utility>
 #include <vector>
 
 namespace polyhex {
@@ -31,6 +32,35 @@ std::vector<char> cell_ring_region(const Eigen::MatrixBase<Cells>& C, Eigen::Ind
     region.swap(grown);
   }
   return region;
+}
+
+/// Per free vertex, the (active cell, corner) pairs that use it, in active-cell order: corners[start[i] ..
+/// start[i + 1]) for free vertex i.
+struct CellIncidence {
+  std::vector<int> start;                     ///< #free + 1
+  std::vector<std::pair<int, int>> corners;  ///< (index into `active`, corner k)
+};
+
+/// \param C       #C by k vertex indices
+/// \param active  the cells that count, by index into C
+/// \param slot    per vertex: its index among the free vertices, or -1
+/// \param nfree   the number of free vertices
+template <class Cells>
+CellIncidence cell_incidence(const Eigen::MatrixBase<Cells>& C, const std::vector<int>& active,
+                             const std::vector<int>& slot, size_t nfree) {
+  std::vector<std::vector<std::pair<int, int>>> inc(nfree);
+  for (size_t a = 0; a < active.size(); ++a)
+    for (Eigen::Index k = 0; k < C.cols(); ++k) {
+      const int s = slot[size_t(C(active[a], k))];
+      if (s >= 0) inc[size_t(s)].push_back({int(a), int(k)});
+    }
+  CellIncidence r;
+  r.start.assign(nfree + 1, 0);
+  for (size_t i = 0; i < nfree; ++i) {
+    r.start[i + 1] = r.start[i] + int(inc[i].size());
+    r.corners.insert(r.corners.end(), inc[i].begin(), inc[i].end());
+  }
+  return r;
 }
 
 }  // namespace polyhex

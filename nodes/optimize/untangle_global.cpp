@@ -178,20 +178,9 @@ class GlobalUntangler {
       scale_.push_back(s > 0 ? s / 12.0 : 1.0);
     }
     // incident active hexes of each free vertex (fixed order: by hex index)
-    start_.assign(free_.size() + 1, 0);
-    for (size_t i = 0; i < free_.size(); ++i) start_[i + 1] = start_[i];
-    std::vector<std::vector<std::pair<int, int>>> inc(free_.size());
     std::vector<int> slot(size_t(nv), -1);
     for (size_t i = 0; i < free_.size(); ++i) slot[size_t(free_[i])] = int(i);
-    for (size_t a = 0; a < active_.size(); ++a)
-      for (int k = 0; k < 8; ++k) {
-        const int s = slot[size_t(H_(active_[a], k))];
-        if (s >= 0) inc[size_t(s)].push_back({int(a), k});
-      }
-    for (size_t i = 0; i < free_.size(); ++i) {
-      start_[i + 1] = start_[i] + int(inc[i].size());
-      corners_.insert(corners_.end(), inc[i].begin(), inc[i].end());
-    }
+    inc_ = cell_incidence(H_, active_, slot, free_.size());
     hex_energy_.assign(active_.size(), 0.0);
     hex_grad_.assign(active_.size(), Mat83::Zero());
   }
@@ -254,8 +243,8 @@ class GlobalUntangler {
       g->setZero(ndof_);
       tbb::parallel_for(size_t(0), free_.size(), [&](size_t i) {
         Vec3 gv = Vec3::Zero();
-        for (int c = start_[i]; c < start_[i + 1]; ++c)
-          gv += hex_grad_[size_t(corners_[size_t(c)].first)].row(corners_[size_t(c)].second).transpose();
+        for (int c = inc_.start[i]; c < inc_.start[i + 1]; ++c)
+          gv += hex_grad_[size_t(inc_.corners[size_t(c)].first)].row(inc_.corners[size_t(c)].second).transpose();
         const int v = free_[i], d = dof_[size_t(v)];
         if (on_surface_[size_t(v)])
           g->segment<2>(d) = frame_[i].transpose() * gv;
@@ -310,8 +299,7 @@ class GlobalUntangler {
   std::vector<int> active_;    ///< hexes with a free vertex
   std::vector<int> active_index_;
   std::vector<double> scale_;  ///< per active hex: initial mean edge length
-  std::vector<int> start_;     ///< per free vertex: its range in corners_
-  std::vector<std::pair<int, int>> corners_;  ///< (active hex, corner) of each free vertex
+  CellIncidence inc_;          ///< per free vertex: (active hex, corner) pairs
   std::vector<Vec3> base_;
   std::vector<Eigen::Matrix<double, 3, 2>> frame_;
   std::vector<double> hex_energy_;

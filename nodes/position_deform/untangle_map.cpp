@@ -185,7 +185,6 @@ class MapUntangler {
     active_.clear();
     rinv_.clear();
     weight_.clear();
-    corners_.clear();
     ndof_ = 0;
     dof_.assign(size_t(nv), -1);
     for (Eigen::Index v = 0; v < nv; ++v)
@@ -220,18 +219,7 @@ class MapUntangler {
     // weights floored: a sliver's tiny weight would make its barrier too weak to keep it from inverting
     for (double& w : weight_) w = mean_vol > 0 ? std::max(w / mean_vol, kMinWeight) : 1.0;
     mean_edge_ = active_.empty() || edge_sum <= 0 ? 1.0 : edge_sum / (3.0 * double(active_.size()));
-    // incident active tets of each free vertex (fixed order: by tet index)
-    std::vector<std::vector<std::pair<int, int>>> inc(free_.size());
-    for (size_t a = 0; a < active_.size(); ++a)
-      for (int k = 0; k < 4; ++k) {
-        const int s = slot[size_t(T_(active_[a], k))];
-        if (s >= 0) inc[size_t(s)].push_back({int(a), k});
-      }
-    start_.assign(free_.size() + 1, 0);
-    for (size_t i = 0; i < free_.size(); ++i) {
-      start_[i + 1] = start_[i] + int(inc[i].size());
-      corners_.insert(corners_.end(), inc[i].begin(), inc[i].end());
-    }
+    inc_ = cell_incidence(T_, active_, slot, free_.size());  // by tet index: a fixed order
     tet_energy_.assign(active_.size(), 0.0);
     tet_grad_.assign(active_.size(), Mat43::Zero());
   }
@@ -294,8 +282,8 @@ class MapUntangler {
       g->setZero(ndof_);
       tbb::parallel_for(size_t(0), free_.size(), [&](size_t i) {
         Vec3 gv = Vec3::Zero();
-        for (int c = start_[i]; c < start_[i + 1]; ++c)
-          gv += tet_grad_[size_t(corners_[size_t(c)].first)].row(corners_[size_t(c)].second).transpose();
+        for (int c = inc_.start[i]; c < inc_.start[i + 1]; ++c)
+          gv += tet_grad_[size_t(inc_.corners[size_t(c)].first)].row(inc_.corners[size_t(c)].second).transpose();
         const int d = dof_[size_t(free_[i])];
         for (int j = 0; j < 3 && axes_[i][size_t(j)] >= 0; ++j) (*g)[d + j] = gv[axes_[i][size_t(j)]];
       });
@@ -319,8 +307,7 @@ class MapUntangler {
   std::vector<Mat3> rinv_;                 ///< per active tet: inverse of its input edge matrix
   std::vector<double> weight_;             ///< per active tet: input volume over the mean
   double mean_edge_ = 1;
-  std::vector<int> start_;                 ///< per free vertex: its range in corners_
-  std::vector<std::pair<int, int>> corners_;  ///< (active tet, corner) of each free vertex
+  CellIncidence inc_;                      ///< per free vertex: (active tet, corner) pairs
   std::vector<Vec3> base_;
   std::vector<double> tet_energy_;
   std::vector<Mat43> tet_grad_;
