@@ -1,5 +1,4 @@
 #include "nodes/position_deform/position_deform.h"
-#include "nodes/position_deform/untangle_map.h"
 
 #include <Eigen/Dense>
 #include <Eigen/IterativeLinearSolvers>
@@ -525,15 +524,7 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
     up.max_iterations = p.untangle_iterations;
     up.rings = p.untangle_rings;
     up.seconds = p.untangle_seconds;
-    MapUntangleStats us;
-    untangle_polycube_map(input.V, input.T, out.U, fixed_axes, up, &us);
-    st.inverted_tets_before_untangle = us.inverted_before;
-    st.untangle_free_vertices = us.free_vertices;
-    st.flat_tets = us.flat;
-    st.untangle_lbfgs_iterations = us.lbfgs_iterations;
-    st.untangle_polish_iterations = us.polish_iterations;
-    st.untangle_time_budget_hit = us.time_budget_hit;
-    st.seconds_untangle = us.seconds;
+    untangle_polycube_map(input.V, input.T, out.U, fixed_axes, up, &st.untangle);
   }
 
   // Inverted tets and distortion of input -> PolyCube. A few near-degenerate tets have distortions of

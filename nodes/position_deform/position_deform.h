@@ -33,6 +33,7 @@
 #include <string>
 
 #include "nodes/artefacts/polycube_map.h"
+#include "nodes/position_deform/untangle_map.h"
 
 namespace polyhex {
 
@@ -56,13 +57,8 @@ struct PositionDeformStats {
   int merged_same_axis_charts = 0;      ///< same-axis charts sharing a vertex, forced onto one plane
   double chart_coordinates_rounded_max_shift = 0;  ///< max |c − k h| / h over charts
   int inverted_tets = 0;                ///< tets of the PolyCube map with signed volume <= 0 (after the untangling)
-  long inverted_tets_before_untangle = 0;  ///< the same, as the final solve leaves them (concave edges, Fig. 9)
-  long untangle_free_vertices = 0;
-  long flat_tets = 0;                   ///< inverted tets with their 4 vertices on one chart plane (untangle_map.h)
-  long untangle_lbfgs_iterations = 0;    ///< L-BFGS iterations of the untangling rounds (<= untangle_iterations)
-  long untangle_polish_iterations = 0;   ///< and of its polish
-  bool untangle_time_budget_hit = false;
-  double seconds_untangle = 0;
+  MapUntangleStats untangle;            ///< the untangling's figures (all 0 when it is off); inverted_before = as the
+                                        ///< final solve leaves them (concave edges, Fig. 9)
   double distortion = 0;                ///< median conformal distortion ||J||_F ||J^-1||_F / 3 (input -> PolyCube) of non-inverted tets
   double distortion_p99 = 0;            ///< its 99th percentile
   double distortion_max = 0;

@@ -38,7 +38,7 @@ struct MapUntangleParams {
 
 struct MapUntangleStats {
   long inverted_before = 0, inverted_after = 0;  ///< tets with signed PolyCube volume <= 0
-  long flat = 0;                ///< of them, tets with their 4 vertices on one chart plane (no move can fix them)
+  long flat = 0;                ///< of them, tets no move that keeps the PolyCube can open (4 vertices on a plane, 3 on an edge line)
   long free_vertices = 0;
   int rounds = 0;               ///< ε updates done
   long lbfgs_iterations = 0;    ///< L-BFGS iterations of the untangling rounds

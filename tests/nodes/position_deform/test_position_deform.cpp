@@ -120,10 +120,10 @@ TEST_CASE("the map's untangling removes folds and keeps every chart on its integ
   const SurfaceMesh s = make_shape(sp);
   Run a = run_pipeline(s, 0.04, off), b = run_pipeline(s, 0.04, on);
   REQUIRE(a.stats.inverted_tets > 0);
-  CHECK(b.stats.inverted_tets_before_untangle == a.stats.inverted_tets);
+  CHECK(b.stats.untangle.inverted_before == a.stats.inverted_tets);
   CHECK(b.stats.inverted_tets < a.stats.inverted_tets / 2);
-  CHECK(b.stats.untangle_lbfgs_iterations > 0);
-  CHECK(b.stats.untangle_lbfgs_iterations <= 600);
+  CHECK(b.stats.untangle.lbfgs_iterations > 0);
+  CHECK(b.stats.untangle.lbfgs_iterations <= 600);
   check_planes(b);
   CHECK(b.map.chart_plane == a.map.chart_plane);
 }
