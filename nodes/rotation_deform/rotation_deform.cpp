@@ -310,6 +310,7 @@ void check_params(const RotationDeformParams& p) {
   if (p.iterations < 1 || p.iterations > 50) throw range("iterations", p.iterations, "[1, 50]");
   if (!(p.anchor_weight > 0 && p.anchor_weight <= 1e6)) throw range("anchor_weight", p.anchor_weight, "(0, 1e6]");
   if (!(p.feature_angle >= 0 && p.feature_angle <= 180)) throw range("feature_angle", p.feature_angle, "[0, 180]");
+  if (!(p.flatten >= 0 && p.flatten <= 1)) throw range("flatten", p.flatten, "[0, 1]");
   if (p.solve_mode != "multi_column" && p.solve_mode != "parallel")
     throw ConfigError("rotation_deform: param `solve_mode` = \"" + p.solve_mode +
                       "\" is not one of: multi_column, parallel");
@@ -449,6 +450,7 @@ RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformP
   Eigen::MatrixXd Bq = Eigen::MatrixXd::Zero(n, 4), Bp(n, 3);
   std::vector<Eigen::Matrix3d> rot(n);
   const Eigen::Vector4d identity(0, 0, 0, 1);
+  std::vector<int> baxis(nB, -1);  // closest axis 2k (+) or 2k+1 (-) of a non-feature boundary vertex, -1 feature
 
   for (int it = 1; it <= params.iterations; ++it) {
     throw_if_interrupted();  // safe point: nothing of this iteration computed yet
@@ -476,6 +478,12 @@ RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformP
       known[b] = !feature[b];
       // 2-3. §4.1: minimal axis-aligning rotation, coherently oriented.
       target[b] = feature[b] ? identity : coherent_quaternion(axis_aligning_rotation(nv / len));
+      baxis[b] = -1;
+      if (!feature[b]) {
+        int k = 0;
+        nv.cwiseAbs().maxCoeff(&k);
+        baxis[b] = 2 * k + (nv[k] >= 0 ? 0 : 1);
+      }
     });
     st.feature_vertices = static_cast<int>(std::count(feature.begin(), feature.end(), 1));
 
@@ -523,9 +531,21 @@ RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformP
         return;
       }
       Eigen::Vector3d acc = Eigen::Vector3d::Zero(), pinned_sum = Eigen::Vector3d::Zero();
+      const int bi = top.bindex[i];
       for (const int* j = top.neighbours.begin(i); j != top.neighbours.end(i); ++j) {
         const Eigen::Vector3d vj = cur.V.row(*j).transpose();
-        acc += (rot[i] + rot[*j]) * (vi - vj);
+        Eigen::Vector3d e = (rot[i] + rot[*j]) * (vi - vj);
+        // Surface flattening (beyond the paper, see the header): a surface edge between two
+        // non-feature vertices with the same closest axis loses that fraction of its component
+        // along the axis. Edge (j, i) gets -e: rows i and j stay consistent.
+        if (params.flatten > 0 && bi >= 0 && baxis[bi] >= 0) {
+          const int bj = top.bindex[*j];
+          if (bj >= 0 && baxis[bj] == baxis[bi] &&
+              std::find(top.bvert_neighbours.begin(bi), top.bvert_neighbours.end(bi), bj) !=
+                  top.bvert_neighbours.end(bi))
+            e[baxis[bi] / 2] *= 1.0 - params.flatten;
+        }
+        acc += e;
         if (top.pinned[*j]) pinned_sum += vj;
       }
       Bp.row(i) = (0.5 * acc + pinned_sum).transpose();

@@ -33,35 +33,42 @@
 ///    the pinned vertex's row and column are replaced by the identity (its value moved to the
 ///    right-hand side). L depends only on connectivity, so it is factored once.
 ///
-/// Measured limits (edge length 0.02, 5 iterations; alignment after iteration 5 / inverted tets):
-/// the target of alignment >= 0.7 on every model is NOT met by this (paper) formulation
-/// with unit anchors: bunny 0.583 / 488, fandisk 0.935 / 82, rockerarm 0.778 / 1085,
-/// fertility 0.602 / 2103, bumpy_torus 0.530 / 1217, casting 0.884 / 455. Variants measured and
-/// rejected (kept out of the code because none reaches 0.7 everywhere without several times more
-/// inverted tets):
+/// Surface flattening (beyond the paper; `flatten` = β, default 1, 0 gives the paper's Eq. 1): in
+/// the right-hand side of Eq. 1, the target vector e = ½(∇_i+∇_j)(ṽ_i-ṽ_j) of a surface edge whose
+/// two end vertices are non-features with the same closest signed axis a loses the fraction β of its
+/// component along a: e ← e - β (e·a) a. The edge (j, i) gets -e, so the system stays the
+/// least-squares form of Eq. 1 and its matrix does not change (still factored once per run). Why:
+/// the rotation field is the solution of a Laplace problem, smooth at the scale of a few tets, so
+/// the paper's Eq. 1 rotates a bump of that size as a whole instead of flattening it; the per-edge
+/// projection removes the bump's height where the labels already agree, and the volume follows in
+/// the same solve. The axis comes from the vertex normal, exactly the axis its rotation targets.
+///
+/// Measured (tets at edge length 0.02, 5 iterations, `polyhex run` of surface -> tets -> rotate; alignment
+/// after iteration 5 / inverted tets / mean conformal distortion / volume ratio), β = 0 (paper) -> β = 1:
+///   bunny        0.585 / 505 / 1.170 / 0.907  ->  0.801 / 493 / 1.207 / 0.881
+///   fandisk      0.933 /  48 / 1.080 / 0.945  ->  0.972 /  36 / 1.085 / 0.937
+///   rockerarm    0.775 / 943 / 1.160 / 0.921  ->  0.889 / 738 / 1.211 / 0.902
+///   fertility    0.603 / 2126 / 1.428 / 0.841 ->  0.796 / 1913 / 1.450 / 0.805
+///   bumpy_torus  0.530 / 1218 / 1.354 / 0.864 ->  0.741 / 1170 / 1.291 / 0.824
+///   casting      0.883 / 402 / 1.113 / 0.950  ->  0.939 / 277 / 1.125 / 0.930
+/// β = 0.5 lies between (bunny 0.750, fertility 0.751); rescaling the projected edge to its old
+/// length changes alignment by < 0.005 and gave more inverted hexes downstream, so it is not done.
+/// Fewer inverted tets, a few % more volume loss (the flattened bumps' volume).
+///
+/// Variants of the paper's formulation measured before (β = 0) and rejected: each trades alignment
+/// for several times more inverted tets, or does not raise alignment at all:
 ///  - anchor weight per vertex w² N_v (the balance of the paper's normalised Laplace row q_i - mean_j q_j
-///    against a unit anchor row): bunny 0.681 / 3085, fandisk 0.943 / 374, rockerarm 0.817 / 4617,
-///    fertility 0.667 / 6639, bumpy_torus 0.649 / 11472, casting 0.915 / 1659; alignment stops rising
-///    after iteration 4 on rockerarm, fertility, casting. w² = N_v / 4 lies between (bunny 0.653 / 1138,
-///    fertility 0.654 / 3808, bumpy_torus 0.612 / 4292): alignment and inversions trade along one curve,
-///    so `anchor_weight` is the alignment-strength knob and stays at the paper's 1. Downstream
-///    (configs/polycube.json) anchor_weight 2 gives bunny alignment 0.671 but final hex sj_min -0.090 /
-///    sj_avg 0.928 against -0.006 / 0.931 at 1 (fandisk -0.054 / 0.951 against -0.004 / 0.959).
-///  - Inverted tets are boundary slivers: of bunny's 488 (fertility 2103) after iteration 5, 476 (1865)
-///    touch the boundary and 328 (584) are among the 5 % worst-shaped input tets.
-///  - target axis chosen from normals smoothed over 3 or 10 surface rings (rotation still from the raw
-///    normal): within ±0.005 of the raw choice on all six models; the axis choice is not what limits.
-///    Rotating the smoothed normal (a smooth field that leaves bumps unflattened) is worse
-///    (bunny 0.557, fertility 0.528 with w² N_v).
-///  - features off (feature_angle 180): bunny 0.584, fertility 0.602, bumpy_torus 0.530: the feature
-///    rule does not limit either.
-///  - Eq. 1 on the input edges with accumulated rotations ∇_total = ∇_k ... ∇_1 (instead of this
-///    iteration's rotations on the previous mesh): lower alignment (bunny 0.561) and more inverted
-///    tets (fertility 3360, bumpy_torus 1708), more volume loss (fertility 0.73): the paper's
-///    "each iteration starts from the previous deformed mesh" is kept.
-/// The models below 0.7 (bunny, fertility, bumpy_torus) carry surface detail (fur-like noise, bumps)
-/// at a scale of a few tets: a rotation field smooth enough to integrate without folding does not
-/// flatten it, and the 15° per-triangle measure counts it as unaligned.
+///    against a unit anchor row): bunny 0.681 / 3085, fertility 0.667 / 6639, bumpy_torus 0.649 / 11472;
+///    alignment stops rising after iteration 4 on rockerarm, fertility, casting. Downstream
+///    anchor_weight 2 made the final hexes worse (bunny sj_min -0.090 against -0.006 at 1, at the time).
+///  - target axis chosen from normals smoothed over 3 or 10 surface rings: within ±0.005 of the raw
+///    choice; rotating the smoothed normal is worse (bunny 0.557).
+///  - features off (feature_angle 180): within 0.001.
+///  - Eq. 1 on the input edges with accumulated rotations ∇_k ... ∇_1: lower alignment (bunny 0.561),
+///    more inverted tets and volume loss; "each iteration starts from the previous deformed mesh" is kept.
+/// The paper's formulation alone left the noisy organic models (bunny, fertility, bumpy_torus) at
+/// 0.53-0.60: their surface detail is a few tets wide, below what a fold-free smooth rotation field
+/// flattens; the flattening term acts exactly at that scale.
 #pragma once
 
 #include <Eigen/Core>
@@ -79,6 +86,7 @@ struct RotationDeformParams {
   int iterations = 5;            ///< rotation-driven iterations (§4.2: 5), range [1, 50]
   double anchor_weight = 1.0;    ///< w, weight of the soft boundary anchors (§4.1: unit), (0, 1e6]
   double feature_angle = 60.0;   ///< degrees: a vertex whose incident boundary normals differ by more is a feature, [0, 180]
+  double flatten = 0.75;         ///< β of the surface flattening in Eq. 1 (0 = the paper's Eq. 1; see the file comment), [0, 1]
   std::string solve_mode = "multi_column";  ///< "multi_column" (one 4- and one 3-column solve) or "parallel" (TBB over columns)
   bool save_iterations = false;  ///< the binding writes each iteration's mesh as <out>/<id>.iter<k>.vtk
 };

@@ -21,6 +21,10 @@ const bool registered = register_node(make_node<P>(
         .add("feature_angle", &P::feature_angle,
              "degrees: a boundary vertex whose incident face normals differ by more is a feature (not a constraint)", 0,
              180)
+        .add("flatten", &P::flatten,
+             "fraction of a same-axis surface edge's component along its axis removed in Eq. 1's target "
+             "(0 = the paper's Eq. 1), [0, 1]",
+             0, 1)
         .add_choice("solve_mode", &P::solve_mode, {"multi_column", "parallel"},
                     "several right-hand sides: one multi-column solve or TBB-parallel columns")
         .add("save_iterations", &P::save_iterations, "write each iteration's mesh as <out>/<id>.iter<k>.vtk"),
@@ -82,7 +86,7 @@ const bool registered = register_node(make_node<P>(
       m["compute_seconds"] = total;
       m["factor_solve_fraction"] = total > 0 ? fs / total : 0.0;  // (factor + solve) / compute time
       return make_artefact(std::move(r.mesh));
-    }));
+    }).with_version("2"));
 
 }  // namespace
 }  // namespace polyhex

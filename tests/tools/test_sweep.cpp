@@ -130,12 +130,13 @@ TEST_CASE("sweep: a linked axis sets both params; named cases keep their order a
   cases = json::parse(n.out)["cases"];
   REQUIRE(cases.size() == 4);
   CHECK(cases[0]["name"] == "paper");
-  CHECK(cases[0]["set"] == json::object());
+  CHECK(cases[0]["set"] == json({{"rotate.flatten", 0}}));
   CHECK(cases[1]["name"] == "no_features");
   CHECK(cases[1]["set"] == json({{"rotate.feature_angle", 180}}));
   CHECK(cases[2]["set"] == json({{"rotate.anchor_weight", 10}}));
   CHECK(cases[3]["set"] == json({{"rotate.iterations", 2}}));
-  CHECK(json::parse(n.out)["swept"] == json({"rotate.feature_angle", "rotate.anchor_weight", "rotate.iterations"}));
+  CHECK(json::parse(n.out)["swept"] ==
+        json({"rotate.flatten", "rotate.feature_angle", "rotate.anchor_weight", "rotate.iterations"}));
 }
 
 TEST_CASE("sweep: invalid sweeps are config errors naming the path (exit 2, nothing run)", "[sweep]") {
