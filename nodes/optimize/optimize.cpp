@@ -678,8 +678,7 @@ bool better_result(const OptimizeStats& a, const OptimizeStats& b) {
 }
 
 HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback, const SurfaceMesh& surface,
-                                   const OptimizeParams& p, OptimizeStats* stats, OptimizeStats* fallback_stats,
-                                   bool* used_fallback) {
+                                   const OptimizeParams& p, OptimizeStats* stats, FallbackOutcome* outcome) {
   // Both candidates go through (a)-(b''); the shape improvement (c), which never lowers the minimum nor
   // un-inverts, runs on the better one only.
   const auto t0 = Clock::now();
@@ -712,13 +711,17 @@ HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback,
   OptimizeStats& kept = used ? b : a;
   summarise(out, kept.sj_min_after, kept.sj_avg_after, kept.inverted_after);
   if (used) second_seconds += std::chrono::duration<double>(Clock::now() - tf).count();
-  if (fallback_stats && second) {
-    *fallback_stats = b;
-    fallback_stats->seconds = second_seconds;
-  }
   kept.seconds = std::chrono::duration<double>(Clock::now() - t0).count();  // the whole stage
   if (stats) *stats = kept;
-  if (used_fallback) *used_fallback = used;
+  if (outcome) {
+    *outcome = FallbackOutcome{};
+    outcome->ran = second != nullptr;
+    outcome->kept = used;
+    if (second) {
+      outcome->stats = b;
+      outcome->stats.seconds = second_seconds;
+    }
+  }
   return out;
 }
 

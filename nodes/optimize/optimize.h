@@ -102,6 +102,14 @@ HexMesh optimize_hexes(const HexMesh& mesh, const SurfaceMesh& surface, const Op
 /// Whether optimization result a is better than b: fewer inverted hexes, then a higher minimum scaled Jacobian.
 bool better_result(const OptimizeStats& a, const OptimizeStats& b);
 
+/// What happened to the fallback candidate of optimize_hexes_or_fallback.
+struct FallbackOutcome {
+  bool ran = false;     ///< the fallback was optimized (the first result had inverted hexes or a low minimum)
+  bool kept = false;    ///< its result was returned
+  OptimizeStats stats;  ///< its figures if it ran (after-figures before the shape phase unless kept);
+                        ///< seconds = its own time, its shape pass included if kept
+};
+
 /// Optimizes `mesh`; if a fallback mesh is given (the same core padded another way, e.g. with its inverted
 /// boundary hexes peeled: pad.h peel_boundary_hexes) and the result has inverted hexes or a minimum scaled
 /// Jacobian below p.fallback_below_sj, optimizes the fallback too and returns the better result
@@ -109,12 +117,10 @@ bool better_result(const OptimizeStats& a, const OptimizeStats& b);
 /// shape improvement, which never lowers the minimum, runs on the better one only.
 /// \param stats  the kept result's figures, seconds = the whole call
 /// \param fallback  null, or a second candidate for the same shape
-/// \param fallback_stats  out: the fallback run's figures (if run; after-figures before the shape phase unless kept)
-/// \param used_fallback  out: whether the fallback's result was kept
+/// \param outcome  out: whether the fallback ran and was kept, and its figures
 /// \throw as optimize_hexes
 HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback, const SurfaceMesh& surface,
-                                   const OptimizeParams& p, OptimizeStats* stats, OptimizeStats* fallback_stats = nullptr,
-                                   bool* used_fallback = nullptr);
+                                   const OptimizeParams& p, OptimizeStats* stats, FallbackOutcome* outcome = nullptr);
 
 /// Regularised Winslow energy of one hex: Σ over its 8 corners of |J|_F² / (3 χ(det J, ε)^{2/3}), J the
 /// corner's edge vectors divided by `scale`; 8 for a cube of edge `scale` as ε -> 0.

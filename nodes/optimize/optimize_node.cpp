@@ -41,19 +41,17 @@ const bool registered = register_node(make_node<P>(
      {"fallback", artefact_name<HexMesh>(), true}},
     artefact_name<HexMesh>(),
     [](const P& p, const Inputs& in, NodeContext& ctx) {
-      OptimizeStats s, fs;
-      bool used_fallback = false;
+      OptimizeStats s;
+      FallbackOutcome fb;
       auto fallback = in.has(2) ? in.get<HexMesh>(2) : nullptr;
-      HexMesh out = optimize_hexes_or_fallback(*in.get<HexMesh>(0), fallback.get(), *in.get<SurfaceMesh>(1), p, &s, &fs,
-                                               &used_fallback);
+      HexMesh out = optimize_hexes_or_fallback(*in.get<HexMesh>(0), fallback.get(), *in.get<SurfaceMesh>(1), p, &s, &fb);
       auto& j = ctx.metrics;
-      const bool fallback_ran = fallback && fs.seconds > 0;
-      j["fallback_ran"] = fallback_ran;
-      j["fallback_kept"] = used_fallback;
-      if (fallback_ran) {
-        j["fallback_inverted"] = fs.inverted_after;
-        j["fallback_sj_min"] = fs.sj_min_after;
-        j["fallback_seconds"] = fs.seconds;
+      j["fallback_ran"] = fb.ran;
+      j["fallback_kept"] = fb.kept;
+      if (fb.ran) {
+        j["fallback_inverted"] = fb.stats.inverted_after;
+        j["fallback_sj_min"] = fb.stats.sj_min_after;
+        j["fallback_seconds"] = fb.stats.seconds;
       }
       j["sj_min_before"] = s.sj_min_before;
       j["sj_avg_before"] = s.sj_avg_before;

@@ -240,20 +240,22 @@ TEST_CASE("the fallback mesh is optimized only when hexes stay inverted, and kep
   const HexMesh clean = test::grid_hex_mesh(3, 3, 3);
   OptimizeParams frozen = no_phases();  // nothing moves: the tangled mesh stays tangled
   frozen.release_boundary = false;
-  OptimizeStats st, fst;
-  bool used = false;
-  HexMesh out = optimize_hexes_or_fallback(tangled, &clean, s, frozen, &st, &fst, &used);
-  CHECK(used);
-  CHECK(fst.inverted_after == 0);
+  OptimizeStats st;
+  FallbackOutcome fb;
+  HexMesh out = optimize_hexes_or_fallback(tangled, &clean, s, frozen, &st, &fb);
+  CHECK(fb.ran);
+  CHECK(fb.kept);
+  CHECK(fb.stats.inverted_after == 0);
+  CHECK(fb.stats.seconds >= 0);
   CHECK(st.inverted_after == 0);
   CHECK(hex_quality(out, nullptr).inverted == 0);
   CHECK(out.V == clean.V);
   // a clean first result above fallback_below_sj: the fallback is not run
-  OptimizeStats st2, fst2;
-  fst2.seconds = -1;
-  out = optimize_hexes_or_fallback(clean, &tangled, s, frozen, &st2, &fst2, &used);
-  CHECK_FALSE(used);
-  CHECK(fst2.seconds == -1);  // untouched
+  OptimizeStats st2;
+  fb.ran = fb.kept = true;  // overwritten
+  out = optimize_hexes_or_fallback(clean, &tangled, s, frozen, &st2, &fb);
+  CHECK_FALSE(fb.ran);
+  CHECK_FALSE(fb.kept);
   // a valid but poor first result (minimum below fallback_below_sj): the fallback runs and wins if better
   HexMesh poor = clean;
   for (double t : {0.45, 0.4, 0.35, 0.3, 0.25, 0.2}) {  // squeezed along the diagonal, not inverted
@@ -262,21 +264,20 @@ TEST_CASE("the fallback mesh is optimized only when hexes stay inverted, and kep
   }
   REQUIRE(hex_quality(poor, nullptr).inverted == 0);
   REQUIRE(hex_quality(poor, nullptr).sj_min < frozen.fallback_below_sj);
-  fst2.seconds = -1;
-  out = optimize_hexes_or_fallback(poor, &clean, s, frozen, &st2, &fst2, &used);
-  CHECK(fst2.seconds >= 0);
-  CHECK(used);
+  out = optimize_hexes_or_fallback(poor, &clean, s, frozen, &st2, &fb);
+  CHECK(fb.ran);
+  CHECK(fb.kept);
   CHECK(out.V == clean.V);
   OptimizeParams never = frozen;
   never.fallback_below_sj = 0;
-  fst2.seconds = -1;
-  out = optimize_hexes_or_fallback(poor, &clean, s, never, &st2, &fst2, &used);
-  CHECK(fst2.seconds == -1);
-  CHECK_FALSE(used);
+  out = optimize_hexes_or_fallback(poor, &clean, s, never, &st2, &fb);
+  CHECK_FALSE(fb.ran);
+  CHECK_FALSE(fb.kept);
   CHECK(out.V == poor.V);
-  // a worse fallback is not kept
-  out = optimize_hexes_or_fallback(tangled, &tangled, s, frozen, &st2, &fst2, &used);
-  CHECK_FALSE(used);
+  // a worse fallback runs but is not kept
+  out = optimize_hexes_or_fallback(tangled, &tangled, s, frozen, &st2, &fb);
+  CHECK(fb.ran);
+  CHECK_FALSE(fb.kept);
   CHECK(st2.inverted_after > 0);
   // better_result: fewer inverted first, then the higher minimum
   OptimizeStats a, b;
