@@ -541,6 +541,8 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
   for (double d : dist)
     if (d < 0) ++st.inverted_tets;
     else if (std::isfinite(d)) ok.push_back(d);
+  if (p.untangle_iterations == 0)  // no untangling: the final solve's folds are the map's
+    st.untangle.inverted_before = st.untangle.inverted_after = st.inverted_tets;
   if (!ok.empty()) {
     auto at = [&](double f) {
       auto it = ok.begin() + std::ptrdiff_t(f * double(ok.size() - 1));

@@ -57,8 +57,8 @@ struct PositionDeformStats {
   int merged_same_axis_charts = 0;      ///< same-axis charts sharing a vertex, forced onto one plane
   double chart_coordinates_rounded_max_shift = 0;  ///< max |c − k h| / h over charts
   int inverted_tets = 0;                ///< tets of the PolyCube map with signed volume <= 0 (after the untangling)
-  MapUntangleStats untangle;            ///< the untangling's figures (all 0 when it is off); inverted_before = as the
-                                        ///< final solve leaves them (concave edges, Fig. 9)
+  MapUntangleStats untangle;            ///< the untangling's figures; inverted_before = as the final solve leaves
+                                        ///< them (concave edges, Fig. 9). Off: both counts = inverted_tets, the rest 0
   double distortion = 0;                ///< median conformal distortion ||J||_F ||J^-1||_F / 3 (input -> PolyCube) of non-inverted tets
   double distortion_p99 = 0;            ///< its 99th percentile
   double distortion_max = 0;
