@@ -381,6 +381,34 @@ class Optimizer {
     return q;
   }
 
+  /// Recomputes q (as all_quality) and, if given, det (as corner_dets) for the hexes incident to the
+  /// vertices with `moved` set: in a sweep only selected vertices move.
+  void refresh_quality(std::vector<HexSJ>& q, const std::vector<char>& moved, std::vector<double>* det = nullptr) const {
+    std::vector<char> dirty(size_t(H_.rows()), 0);
+    for (size_t v = 0; v < moved.size(); ++v)
+      if (moved[v])
+        for (int i = start_[v]; i < start_[v + 1]; ++i) dirty[size_t(inc_[size_t(i)])] = 1;
+    std::vector<int> list;
+    for (size_t h = 0; h < dirty.size(); ++h)
+      if (dirty[h]) list.push_back(int(h));
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, list.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        const auto p = points(list[i]);
+        q[size_t(list[i])] = hex_scaled_jacobian(p);
+        if (det) (*det)[size_t(list[i])] = min_corner_det(p, scale_[size_t(H_(list[i], 0))]);
+      }
+    });
+  }
+
+  /// Smallest corner determinant of every hex (over the local edge length: min_corner_det).
+  std::vector<double> corner_dets() const {
+    std::vector<double> d(size_t(H_.rows()));
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, H_.rows(), 512), [&](const tbb::blocked_range<Eigen::Index>& r) {
+      for (Eigen::Index h = r.begin(); h < r.end(); ++h) d[size_t(h)] = min_corner_det(points(int(h)), scale_[size_t(H_(h, 0))]);
+    });
+    return d;
+  }
+
   long count_inverted(double* det_min = nullptr) const {
     std::vector<double> dmin(det_min ? size_t(H_.rows()) : 0);
     std::vector<char> inv(size_t(H_.rows()));
@@ -418,18 +446,27 @@ class Optimizer {
   void untangle() {
     PhaseTimer timer{st_.untangle_seconds};
     long best = std::numeric_limits<long>::max();
+    // qualities and corner determinants kept up to date incrementally (refresh_quality)
+    std::vector<HexSJ> q;
+    std::vector<double> det;
+    std::vector<char> sel(size_t(V_.rows()), 0);
     for (int it = 0, stall = 0; it < p_.untangle_iterations && !out_of_time(); ++it) {
       throw_if_interrupted();
-      double dmin = 0;
-      const long n = count_inverted(&dmin);
+      if (it == 0) {
+        q = all_quality();
+        det = corner_dets();
+      } else {
+        refresh_quality(q, sel, &det);
+      }
+      const long n = long(std::count_if(q.begin(), q.end(), [](const HexSJ& x) { return x.corner_min <= 0; }));
+      const double dmin = det.empty() ? std::numeric_limits<double>::infinity() : *std::min_element(det.begin(), det.end());
       if (n == 0) return;
       // stalled: the count has not improved for 20 sweeps (the global descent takes over)
       if (n < best) best = n, stall = 0;
       else if (++stall >= 20) return;
       const double eps = std::sqrt(1e-8 + 0.04 * std::min(dmin, 0.0) * std::min(dmin, 0.0));
       // vertices of inverted hexes and of the hexes around them
-      std::vector<char> sel(size_t(V_.rows()), 0);
-      const auto q = all_quality();
+      std::fill(sel.begin(), sel.end(), 0);
       for (Eigen::Index h = 0; h < H_.rows(); ++h)
         if (q[size_t(h)].corner_min <= 0)
           for (int k = 0; k < 8; ++k) {
@@ -454,9 +491,13 @@ class Optimizer {
     PhaseTimer timer{st_.maxmin_seconds};
     double prev = -2;
     bool worst_only = false;
+    // Hex qualities, kept up to date incrementally: only the selected vertices move in a sweep, so only
+    // their hexes are recomputed (the worst-only sweeps select a few hundred vertices of 100k+ hexes).
+    std::vector<HexSJ> q = all_quality();
+    std::vector<char> sel(size_t(V_.rows()), 0);
     for (int it = 0, stall = 0; it < 4 * p_.iterations && !out_of_time(); ++it) {
-      std::vector<char> sel(size_t(V_.rows()), 0);
-      const auto q = all_quality();
+      if (it > 0) refresh_quality(q, sel);
+      std::fill(sel.begin(), sel.end(), 0);
       double gmin = 1;
       for (const HexSJ& x : q) gmin = std::min(gmin, x.sj);
       if (!worst_only && ((gmin <= prev + 1e-5 && it > 2) || it >= p_.iterations)) worst_only = true, stall = 0;
