@@ -311,6 +311,10 @@ void check_params(const RotationDeformParams& p) {
   if (!(p.anchor_weight > 0 && p.anchor_weight <= 1e6)) throw range("anchor_weight", p.anchor_weight, "(0, 1e6]");
   if (!(p.feature_angle >= 0 && p.feature_angle <= 180)) throw range("feature_angle", p.feature_angle, "[0, 180]");
   if (!(p.flatten >= 0 && p.flatten <= 1)) throw range("flatten", p.flatten, "[0, 1]");
+  if (!(p.flatten_full_angle >= 0 && p.flatten_full_angle <= 90))
+    throw range("flatten_full_angle", p.flatten_full_angle, "[0, 90]");
+  if (!(p.flatten_max_angle > p.flatten_full_angle && p.flatten_max_angle <= 90))
+    throw range("flatten_max_angle", p.flatten_max_angle, "(flatten_full_angle, 90]");
   if (p.solve_mode != "multi_column" && p.solve_mode != "parallel")
     throw ConfigError("rotation_deform: param `solve_mode` = \"" + p.solve_mode +
                       "\" is not one of: multi_column, parallel");
@@ -451,6 +455,8 @@ RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformP
   std::vector<Eigen::Matrix3d> rot(n);
   const Eigen::Vector4d identity(0, 0, 0, 1);
   std::vector<int> baxis(nB, -1);  // closest axis 2k (+) or 2k+1 (-) of a non-feature boundary vertex, -1 feature
+  std::vector<double> bangle(nB, 0.0);  // degrees between the vertex normal and that axis
+  const double full = params.flatten_full_angle, none = params.flatten_max_angle;
 
   for (int it = 1; it <= params.iterations; ++it) {
     throw_if_interrupted();  // safe point: nothing of this iteration computed yet
@@ -483,6 +489,7 @@ RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformP
         int k = 0;
         nv.cwiseAbs().maxCoeff(&k);
         baxis[b] = 2 * k + (nv[k] >= 0 ? 0 : 1);
+        bangle[b] = std::acos(std::min(1.0, std::abs(nv[k]) / len)) * 180.0 / kPi;
       }
     });
     st.feature_vertices = static_cast<int>(std::count(feature.begin(), feature.end(), 1));
@@ -543,7 +550,12 @@ RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformP
           if (bj >= 0 && baxis[bj] == baxis[bi] &&
               std::find(top.bvert_neighbours.begin(bi), top.bvert_neighbours.end(bi), bj) !=
                   top.bvert_neighbours.end(bi))
-            e[baxis[bi] / 2] *= 1.0 - params.flatten;
+          {
+            // full β up to flatten_full_angle, none from flatten_max_angle, linear between
+            const double angle = std::max(bangle[bi], bangle[bj]);
+            const double w = angle <= full ? 1.0 : angle >= none ? 0.0 : (none - angle) / (none - full);
+            e[baxis[bi] / 2] *= 1.0 - params.flatten * w;
+          }
         }
         acc += e;
         if (top.pinned[*j]) pinned_sum += vj;

@@ -25,6 +25,11 @@ const bool registered = register_node(make_node<P>(
              "fraction of a same-axis surface edge's component along its axis removed in Eq. 1's target "
              "(0 = the paper's Eq. 1), [0, 1]",
              0, 1)
+        .add("flatten_full_angle", &P::flatten_full_angle,
+             "degrees: a surface edge whose end normals lie within this of their axis is flattened by the full β", 0, 90)
+        .add("flatten_max_angle", &P::flatten_max_angle,
+             "degrees: no flattening where an end normal deviates more (linear in between), > flatten_full_angle", 0,
+             90)
         .add_choice("solve_mode", &P::solve_mode, {"multi_column", "parallel"},
                     "several right-hand sides: one multi-column solve or TBB-parallel columns")
         .add("save_iterations", &P::save_iterations, "write each iteration's mesh as <out>/<id>.iter<k>.vtk"),
@@ -86,7 +91,7 @@ const bool registered = register_node(make_node<P>(
       m["compute_seconds"] = total;
       m["factor_solve_fraction"] = total > 0 ? fs / total : 0.0;  // (factor + solve) / compute time
       return make_artefact(std::move(r.mesh));
-    }).with_version("2"));
+    }).with_version("3"));
 
 }  // namespace
 }  // namespace polyhex

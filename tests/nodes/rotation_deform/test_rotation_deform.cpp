@@ -262,6 +262,14 @@ TEST_CASE("rotation: the surface flattening removes a bump the paper's Eq. 1 kee
   CHECK(bump_height(rf.mesh) < 0.25 * height0);
   CHECK(bump_height(rp.mesh) > 0.5 * height0);
   CHECK(rf.iterations.back().alignment > 0.95);
+  // The flattening fades out with the normal's deviation from its axis: with no flattening beyond 5°,
+  // the bump's flanks (up to 27° steep) keep most of their height, as in the paper's Eq. 1.
+  RotationDeformParams narrow;
+  narrow.flatten_full_angle = 0;
+  narrow.flatten_max_angle = 5;
+  const auto rn = rotation_deform(box, narrow);
+  INFO("narrow: " << bump_height(rn.mesh));
+  CHECK(bump_height(rn.mesh) > 0.5 * height0);
   for (auto* r : {&rp, &rf}) {
     CHECK(r->iterations.back().inverted_tets == 0);
     CHECK(r->factor_stats.factorizations == 2);
@@ -343,6 +351,12 @@ TEST_CASE("rotation: bad params and bad meshes are rejected with clear messages"
     CHECK_THROWS_WITH(rotation_deform(box, p), Catch::Contains("`flatten`") && Catch::Contains("[0, 1]"));
     p.flatten = -0.1;
     CHECK_THROWS_AS(rotation_deform(box, p), ConfigError);
+    p.flatten = 1;
+    p.flatten_full_angle = 40;
+    p.flatten_max_angle = 30;
+    CHECK_THROWS_WITH(rotation_deform(box, p), Catch::Contains("`flatten_max_angle`"));
+    p.flatten_full_angle = 95;
+    CHECK_THROWS_WITH(rotation_deform(box, p), Catch::Contains("`flatten_full_angle`") && Catch::Contains("[0, 90]"));
   }
   SECTION("solve mode") {
     p.solve_mode = "gpu";
