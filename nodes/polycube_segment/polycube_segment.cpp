@@ -1031,7 +1031,8 @@ void remove_small_invalid(const Surface& s, const std::vector<Vec3>& normal, con
 /// The extensions after the splits: island cuts, then corner patches (as the params select). If
 /// the result is still invalid and p.final_cleanup, the same from the input labelling with the
 /// small charts beside a chart of their own axis removed by flood fill first (spurious charts the
-/// clean-up's flood fill or the max_splits cap left); the better of the two is kept.
+/// clean-up's flood fill or the max_splits cap left); the better of the two is kept. If that is
+/// still invalid, a second multi-orientation split (below).
 void repair(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p, State& st) {
   const double h = p.hex_edge_length * s.diag;
   auto run = [&](State& x) {
@@ -1040,14 +1041,26 @@ void repair(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSeg
   };
   State base = st;
   run(st);
-  if (!p.final_cleanup || make_result(s, st).valid) return;
-  remove_small_charts(s, normal, p, base, false, [](const Structure& S, int c, int) {
-    for (int d : S.adj[c])
-      if (label_axis(S.label[d]) == label_axis(S.label[c])) return true;
-    return false;
-  });
-  run(base);
-  if (structure_score(s, base) < structure_score(s, st)) st = std::move(base);
+  if (make_result(s, st).valid) return;
+  if (p.final_cleanup) {
+    remove_small_charts(s, normal, p, base, false, [](const Structure& S, int c, int) {
+      for (int d : S.adj[c])
+        if (label_axis(S.label[d]) == label_axis(S.label[c])) return true;
+      return false;
+    });
+    run(base);
+    if (structure_score(s, base) < structure_score(s, st)) st = std::move(base);
+    if (make_result(s, st).valid) return;
+  }
+  // Last: opposite directions can meet along a curve again after the wedge cuts and the small-chart
+  // removal (each relabels whole patches). Split there once more, as §5.1 does for multi-orientation
+  // charts, and repair the corners the new band makes; kept only if it lowers the problem count.
+  if (p.split_multi_orientation) {
+    State trial = st;
+    split_multi_orientation(s, normal, h, p.max_splits, trial);
+    if (p.repair_corners) repair_corners(s, normal, h, p.max_splits, trial);
+    if (structure_score(s, trial) < structure_score(s, st)) st = std::move(trial);
+  }
 }
 
 /// One full §5.1 run with a given number of normal-smoothing passes.

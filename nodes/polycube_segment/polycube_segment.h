@@ -86,7 +86,9 @@ int clean_up_labels(const RowMatrixX3d& V, const RowMatrixX3i& F, Eigen::VectorX
 /// opposite directions touch. Every change is kept only when it lowers (problems, neighbour
 /// deficit), so a valid labelling is returned unchanged. If still invalid (and p.final_cleanup), the
 /// same is tried after removing small charts (area < p.small_chart_area of the surface) that border a
-/// chart of their own axis by flood fill; the better result is kept. Normals are the unsmoothed
+/// chart of their own axis by flood fill; the better result is kept. If that is still invalid (and
+/// p.split_multi_orientation), a last multi-orientation split parts charts of opposite directions
+/// that meet along a curve, kept only if it lowers the problem count. Normals are the unsmoothed
 /// triangle normals.
 /// \param label  #F labels 0..5, changed in place
 /// \return {island cuts, repaired corners}

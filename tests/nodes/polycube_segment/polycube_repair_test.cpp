@@ -100,7 +100,10 @@ TEST_CASE("saddle: opposite directions touching at one vertex get a patch of the
   REQUIRE_FALSE(before.valid);
   CHECK_THAT(joined(before), Catch::Contains("of the opposite direction at vertex"));
   CHECK_THAT(joined(before), Catch::Contains("has valence 4"));
-  auto [islands, corners] = repair_polycube_labels(box.V, box.F, label);
+  const Eigen::VectorXi label0 = label;
+  PolyCubeSegmentParams no_resplit;  // the corner repair alone (without the last-resort multi-orientation split)
+  no_resplit.split_multi_orientation = false;
+  auto [islands, corners] = repair_polycube_labels(box.V, box.F, label, no_resplit);
   // one patch at the saddle vertex; the problems of the quadrants touching box faces of their own
   // axis (e.g. -X quadrant beside the +X face) are not corner problems and stay
   CHECK(islands == 0);
@@ -119,6 +122,12 @@ TEST_CASE("saddle: opposite directions touching at one vertex get a patch of the
   for (int t = 0; t < box.F.rows(); ++t)
     for (int k = 0; k < 3; ++k)
       if (box.F(t, k) == centre) CHECK(label[t] == 2);
+  // with the defaults, the last resort separates each quadrant from the box face of the opposite
+  // direction it meets along an edge (a multi-orientation split): the labelling becomes valid
+  Eigen::VectorXi full = label0;
+  repair_polycube_labels(box.V, box.F, full);
+  INFO(joined(analyse_polycube_labels(box.V, box.F, full)));
+  CHECK(analyse_polycube_labels(box.V, box.F, full).valid);
 }
 
 TEST_CASE("small chart beside a chart of its own axis is removed, the box restored", "[segment]") {
@@ -140,10 +149,22 @@ TEST_CASE("small chart beside a chart of its own axis is removed, the box restor
     CHECK(label == exact);
     CHECK(analyse_polycube_labels(box.V, box.F, label).valid);
   }
-  SECTION("not small: left to the other repairs, still invalid") {
+  SECTION("not small: left to the other repairs, still invalid without the multi-orientation split") {
     p.small_chart_area = 1e-3;
+    p.split_multi_orientation = false;
     repair_polycube_labels(box.V, box.F, label, p);
     CHECK_FALSE(analyse_polycube_labels(box.V, box.F, label).valid);
+  }
+  SECTION("not small: the last-resort multi-orientation split rings it with a separating chart") {
+    p.small_chart_area = 1e-3;
+    repair_polycube_labels(box.V, box.F, label, p);
+    PolyCubeSegmentation after = analyse_polycube_labels(box.V, box.F, label);
+    INFO(joined(after));
+    CHECK(after.valid);
+    // the -Y square stays (it is not small): a ring of another axis now parts it from the +Y face
+    int minus_y = 0;
+    for (int t = 0; t < box.F.rows(); ++t) minus_y += label[t] == 3;
+    CHECK(minus_y > 0);
   }
 }
 

@@ -51,3 +51,24 @@ TEST_CASE("shared surfaces: tetrahedralize, rotation_deform, polycube_segment gi
                                << ", " << seconds << " s");
   }
 }
+
+// fertility at tet edge 0.03: after the wedge cuts and the small-chart removal, a +Y and a -Y chart met
+// along a curve (invalid: "chart 10 (+Y) and chart 17 (-Y) are neighbours on the same axis"); the
+// repair's second multi-orientation split separates them.
+TEST_CASE("shared fertility: opposite charts that meet after the wedge cuts get a separating chart",
+          "[segment][shared]") {
+  const std::filesystem::path f = std::filesystem::path(POLYHEX_SHARED_DIR) / "data" / "surfaces" / "fertility.off";
+  if (!std::filesystem::exists(f)) {
+    WARN("skipped: " << f << " missing");
+    SUCCEED();
+    return;
+  }
+  TetgenParams tp;
+  tp.edge_length = 0.03;
+  const TetMesh deformed = rotation_deform(tetrahedralize(read_surface(f), tp), RotationDeformParams{}).mesh;
+  const PolyCubeSegmentation s = segment_polycube(deformed);
+  INFO((s.problems.empty() ? std::string("valid") : s.problems.front()));
+  CHECK(s.valid);
+  CHECK(s.splits_multi_orientation >= 2);
+  for (auto& c : s.corners) CHECK(c.valence == 3);
+}
