@@ -543,19 +543,16 @@ RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformP
         const Eigen::Vector3d vj = cur.V.row(*j).transpose();
         Eigen::Vector3d e = (rot[i] + rot[*j]) * (vi - vj);
         // Surface flattening (beyond the paper, see the header): a surface edge between two
-        // non-feature vertices with the same closest axis loses that fraction of its component
-        // along the axis. Edge (j, i) gets -e: rows i and j stay consistent.
-        if (params.flatten > 0 && bi >= 0 && baxis[bi] >= 0) {
-          const int bj = top.bindex[*j];
-          if (bj >= 0 && baxis[bj] == baxis[bi] &&
-              std::find(top.bvert_neighbours.begin(bi), top.bvert_neighbours.end(bi), bj) !=
-                  top.bvert_neighbours.end(bi))
-          {
-            // full β up to flatten_full_angle, none from flatten_max_angle, linear between
-            const double angle = std::max(bangle[bi], bangle[bj]);
-            const double w = angle <= full ? 1.0 : angle >= none ? 0.0 : (none - angle) / (none - full);
-            e[baxis[bi] / 2] *= 1.0 - params.flatten * w;
-          }
+        // non-feature vertices with the same closest axis loses the share β w of its component
+        // along the axis, w = 1 up to flatten_full_angle, 0 from flatten_max_angle, linear between.
+        // Edge (j, i) gets -e: rows i and j stay consistent.
+        const int bj = bi >= 0 ? top.bindex[*j] : -1;
+        if (params.flatten > 0 && bj >= 0 && baxis[bi] >= 0 && baxis[bj] == baxis[bi] &&
+            std::find(top.bvert_neighbours.begin(bi), top.bvert_neighbours.end(bi), bj) !=
+                top.bvert_neighbours.end(bi)) {
+          const double angle = std::max(bangle[bi], bangle[bj]);
+          const double w = angle <= full ? 1.0 : angle >= none ? 0.0 : (none - angle) / (none - full);
+          e[baxis[bi] / 2] *= 1.0 - params.flatten * w;
         }
         acc += e;
         if (top.pinned[*j]) pinned_sum += vj;
