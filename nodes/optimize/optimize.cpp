@@ -381,8 +381,9 @@ class Optimizer {
     return q;
   }
 
-  /// Recomputes q (as all_quality) and, if given, det (as corner_dets) for the hexes incident to the
-  /// vertices with `moved` set: in a sweep only selected vertices move.
+  /// Recomputes q[h] (hex_scaled_jacobian, as all_quality) and, if given, det[h] (min_corner_det) for the
+  /// hexes incident to the vertices with `moved` set: in a sweep only selected vertices move. With every
+  /// vertex set it is the full computation. \pre q, det sized #hexes
   void refresh_quality(std::vector<HexSJ>& q, const std::vector<char>& moved, std::vector<double>* det = nullptr) const {
     std::vector<char> dirty(size_t(H_.rows()), 0);
     for (size_t v = 0; v < moved.size(); ++v)
@@ -398,15 +399,6 @@ class Optimizer {
         if (det) (*det)[size_t(list[i])] = min_corner_det(p, scale_[size_t(H_(list[i], 0))]);
       }
     });
-  }
-
-  /// Smallest corner determinant of every hex (over the local edge length: min_corner_det).
-  std::vector<double> corner_dets() const {
-    std::vector<double> d(size_t(H_.rows()));
-    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, H_.rows(), 512), [&](const tbb::blocked_range<Eigen::Index>& r) {
-      for (Eigen::Index h = r.begin(); h < r.end(); ++h) d[size_t(h)] = min_corner_det(points(int(h)), scale_[size_t(H_(h, 0))]);
-    });
-    return d;
   }
 
   long count_inverted(double* det_min = nullptr) const {
@@ -446,18 +438,14 @@ class Optimizer {
   void untangle() {
     PhaseTimer timer{st_.untangle_seconds};
     long best = std::numeric_limits<long>::max();
-    // qualities and corner determinants kept up to date incrementally (refresh_quality)
-    std::vector<HexSJ> q;
-    std::vector<double> det;
-    std::vector<char> sel(size_t(V_.rows()), 0);
+    // qualities and corner determinants kept up to date incrementally: all hexes first, then those of the
+    // vertices the previous sweep selected (refresh_quality)
+    std::vector<HexSJ> q(size_t(H_.rows()));
+    std::vector<double> det(size_t(H_.rows()));
+    std::vector<char> sel(size_t(V_.rows()), 1);
     for (int it = 0, stall = 0; it < p_.untangle_iterations && !out_of_time(); ++it) {
       throw_if_interrupted();
-      if (it == 0) {
-        q = all_quality();
-        det = corner_dets();
-      } else {
-        refresh_quality(q, sel, &det);
-      }
+      refresh_quality(q, sel, &det);
       const long n = long(std::count_if(q.begin(), q.end(), [](const HexSJ& x) { return x.corner_min <= 0; }));
       const double dmin = det.empty() ? std::numeric_limits<double>::infinity() : *std::min_element(det.begin(), det.end());
       if (n == 0) return;
@@ -491,12 +479,12 @@ class Optimizer {
     PhaseTimer timer{st_.maxmin_seconds};
     double prev = -2;
     bool worst_only = false;
-    // Hex qualities, kept up to date incrementally: only the selected vertices move in a sweep, so only
-    // their hexes are recomputed (the worst-only sweeps select a few hundred vertices of 100k+ hexes).
-    std::vector<HexSJ> q = all_quality();
-    std::vector<char> sel(size_t(V_.rows()), 0);
+    // Hex qualities, kept up to date incrementally: all hexes first, then only those of the vertices the
+    // previous sweep selected (the worst-only sweeps select a few hundred vertices of 100k+ hexes).
+    std::vector<HexSJ> q(size_t(H_.rows()));
+    std::vector<char> sel(size_t(V_.rows()), 1);
     for (int it = 0, stall = 0; it < 4 * p_.iterations && !out_of_time(); ++it) {
-      if (it > 0) refresh_quality(q, sel);
+      refresh_quality(q, sel);
       std::fill(sel.begin(), sel.end(), 0);
       double gmin = 1;
       for (const HexSJ& x : q) gmin = std::min(gmin, x.sj);
