@@ -17,6 +17,19 @@ namespace polyhex {
 inline int label_axis(int label) { return label / 2; }
 /// +1 or -1: the direction of a label along its axis.
 inline int label_sign(int label) { return label % 2 == 0 ? 1 : -1; }
+/// Unit vector of a direction label 0..5.
+inline Eigen::Vector3d label_dir(int label) {
+  Eigen::Vector3d d = Eigen::Vector3d::Zero();
+  d[label_axis(label)] = label_sign(label);
+  return d;
+}
+/// The direction label closest to n (ties: the lower label). \pre n != 0
+inline int closest_label(const Eigen::Vector3d& n) {
+  int best = 0;
+  for (int l = 1; l < 6; ++l)
+    if (label_dir(l).dot(n) > label_dir(best).dot(n)) best = l;
+  return best;
+}
 /// "+X", "-X", "+Y", "-Y", "+Z", "-Z"; "?" outside 0..5.
 inline const char* label_name(int label) {
   static const char* names[6] = {"+X", "-X", "+Y", "-Y", "+Z", "-Z"};

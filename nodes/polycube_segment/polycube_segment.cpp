@@ -24,20 +24,6 @@ namespace {
 using Vec3 = Eigen::Vector3d;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-Vec3 label_dir(int l) {
-  Vec3 d = Vec3::Zero();
-  d[label_axis(l)] = label_sign(l);
-  return d;
-}
-
-/// The label whose direction is closest to n.
-int closest_label(const Vec3& n) {
-  int best = 0;
-  for (int l = 1; l < 6; ++l)
-    if (label_dir(l).dot(n) > label_dir(best).dot(n)) best = l;
-  return best;
-}
-
 struct MeshEdge {
   int v[2];
   int t[2];

@@ -14,6 +14,7 @@
 #include <functional>
 #include <numeric>
 
+#include "nodes/artefacts/polycube.h"
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
 
@@ -367,10 +368,7 @@ Eigen::Vector4d coherent_quaternion(const Eigen::Matrix3d& R) {
 }
 
 Eigen::Matrix3d axis_aligning_rotation(const Eigen::Vector3d& n) {
-  int k = 0;
-  n.cwiseAbs().maxCoeff(&k);
-  Eigen::Vector3d a = Eigen::Vector3d::Zero();
-  a[k] = n[k] >= 0 ? 1.0 : -1.0;
+  const Eigen::Vector3d a = label_dir(closest_label(n));
   // Rodrigues for the rotation about n x a by the angle between them; c = n.a >= 1/sqrt(3).
   const Eigen::Vector3d v = n.cross(a);
   const double c = n.dot(a);
@@ -454,8 +452,8 @@ RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformP
   Eigen::MatrixXd Bq = Eigen::MatrixXd::Zero(n, 4), Bp(n, 3);
   std::vector<Eigen::Matrix3d> rot(n);
   const Eigen::Vector4d identity(0, 0, 0, 1);
-  std::vector<int> baxis(nB, -1);  // closest axis 2k (+) or 2k+1 (-) of a non-feature boundary vertex, -1 feature
-  std::vector<double> bangle(nB, 0.0);  // degrees between the vertex normal and that axis
+  std::vector<int> blabel(nB, -1);  // direction label (polycube.h) closest to a non-feature boundary vertex's normal, -1 feature
+  std::vector<double> bangle(nB, 0.0);  // degrees between the vertex normal and that direction
   const double full = params.flatten_full_angle, none = params.flatten_max_angle;
 
   for (int it = 1; it <= params.iterations; ++it) {
@@ -484,12 +482,10 @@ RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformP
       known[b] = !feature[b];
       // 2-3. §4.1: minimal axis-aligning rotation, coherently oriented.
       target[b] = feature[b] ? identity : coherent_quaternion(axis_aligning_rotation(nv / len));
-      baxis[b] = -1;
-      if (!feature[b]) {
-        int k = 0;
-        nv.cwiseAbs().maxCoeff(&k);
-        baxis[b] = 2 * k + (nv[k] >= 0 ? 0 : 1);
-        bangle[b] = std::acos(std::min(1.0, std::abs(nv[k]) / len)) * 180.0 / kPi;
+      blabel[b] = -1;
+      if (!feature[b]) {  // the direction the rotation above targets
+        blabel[b] = closest_label(nv);
+        bangle[b] = std::acos(std::min(1.0, std::abs(nv[label_axis(blabel[b])]) / len)) * 180.0 / kPi;
       }
     });
     st.feature_vertices = static_cast<int>(std::count(feature.begin(), feature.end(), 1));
@@ -547,12 +543,12 @@ RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformP
         // along the axis, w = 1 up to flatten_full_angle, 0 from flatten_max_angle, linear between.
         // Edge (j, i) gets -e: rows i and j stay consistent.
         const int bj = bi >= 0 ? top.bindex[*j] : -1;
-        if (params.flatten > 0 && bj >= 0 && baxis[bi] >= 0 && baxis[bj] == baxis[bi] &&
+        if (params.flatten > 0 && bj >= 0 && blabel[bi] >= 0 && blabel[bj] == blabel[bi] &&
             std::find(top.bvert_neighbours.begin(bi), top.bvert_neighbours.end(bi), bj) !=
                 top.bvert_neighbours.end(bi)) {
           const double angle = std::max(bangle[bi], bangle[bj]);
           const double w = angle <= full ? 1.0 : angle >= none ? 0.0 : (none - angle) / (none - full);
-          e[baxis[bi] / 2] *= 1.0 - params.flatten * w;
+          e[label_axis(blabel[bi])] *= 1.0 - params.flatten * w;
         }
         acc += e;
         if (top.pinned[*j]) pinned_sum += vj;
