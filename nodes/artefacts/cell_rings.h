@@ -39,6 +39,16 @@ std::vector<char> cell_ring_region(const Eigen::MatrixBase<Cells>& C, Eigen::Ind
 struct CellIncidence {
   std::vector<int> start;                     ///< #free + 1
   std::vector<std::pair<int, int>> corners;  ///< (index into `active`, corner k)
+
+  /// Σ cell_grad[a].row(k) over the (a, k) pairs of free vertex i: the vertex's gradient assembled from
+  /// its cells' per-corner gradients (one k-by-3 matrix per active cell).
+  template <class Grads>
+  Eigen::Vector3d gather(size_t i, const Grads& cell_grad) const {
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    for (int c = start[i]; c < start[i + 1]; ++c)
+      g += cell_grad[size_t(corners[size_t(c)].first)].row(corners[size_t(c)].second).transpose();
+    return g;
+  }
 };
 
 /// \param C       #C by k vertex indices

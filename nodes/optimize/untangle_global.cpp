@@ -242,9 +242,7 @@ class GlobalUntangler {
     if (g) {
       g->setZero(ndof_);
       tbb::parallel_for(size_t(0), free_.size(), [&](size_t i) {
-        Vec3 gv = Vec3::Zero();
-        for (int c = inc_.start[i]; c < inc_.start[i + 1]; ++c)
-          gv += hex_grad_[size_t(inc_.corners[size_t(c)].first)].row(inc_.corners[size_t(c)].second).transpose();
+        const Vec3 gv = inc_.gather(i, hex_grad_);
         const int v = free_[i], d = dof_[size_t(v)];
         if (on_surface_[size_t(v)])
           g->segment<2>(d) = frame_[i].transpose() * gv;

@@ -281,9 +281,7 @@ class MapUntangler {
     if (g) {
       g->setZero(ndof_);
       tbb::parallel_for(size_t(0), free_.size(), [&](size_t i) {
-        Vec3 gv = Vec3::Zero();
-        for (int c = inc_.start[i]; c < inc_.start[i + 1]; ++c)
-          gv += tet_grad_[size_t(inc_.corners[size_t(c)].first)].row(inc_.corners[size_t(c)].second).transpose();
+        const Vec3 gv = inc_.gather(i, tet_grad_);
         const int d = dof_[size_t(free_[i])];
         for (int j = 0; j < 3 && axes_[i][size_t(j)] >= 0; ++j) (*g)[d + j] = gv[axes_[i][size_t(j)]];
       });
