@@ -86,10 +86,11 @@ Eigen::Matrix3d quat_matrix(const Eigen::Vector4d& q) {
   return Eigen::Quaterniond(q[3], q[0], q[1], q[2]).toRotationMatrix();
 }
 
-TetMesh sphere_tets(double edge_length) {
+/// Tets of a built-in shape (nodes/shapes).
+TetMesh shape_tets(const char* name, int resolution, double edge_length) {
   ShapeParams sp;
-  sp.name = "sphere";
-  sp.resolution = 24;
+  sp.name = name;
+  sp.resolution = resolution;
   TetgenParams tp;
   tp.edge_length = edge_length;
   return tetrahedralize(make_shape(sp), tp);
@@ -217,7 +218,7 @@ TEST_CASE("rotation: a box rotated by 20 degrees comes back axis-aligned with it
 }
 
 TEST_CASE("rotation: a sphere gains alignment monotonically, no degenerate quaternion", "[rotation]") {
-  const TetMesh sphere = sphere_tets(0.06);
+  const TetMesh sphere = shape_tets("sphere", 24, 0.06);
   RotationDeformParams p;
   auto r = rotation_deform(sphere, p);
   double prev = r.input_alignment;
@@ -279,12 +280,7 @@ TEST_CASE("rotation: the surface flattening removes a bump the paper's Eq. 1 kee
 // On a generated bumpy torus, flattening raises the alignment reached after 5 iterations, every
 // iteration, with few inverted tets (on the real models it even lowers their count, see rotation_deform.h).
 TEST_CASE("rotation: flattening raises the alignment of a bumpy torus", "[rotation]") {
-  ShapeParams sp;
-  sp.name = "bumpy_torus";
-  sp.resolution = 48;
-  TetgenParams tp;
-  tp.edge_length = 0.04;
-  const TetMesh tets = tetrahedralize(make_shape(sp), tp);
+  const TetMesh tets = shape_tets("bumpy_torus", 48, 0.04);
   RotationDeformParams paper, flat;
   paper.flatten = 0;
   const auto rp = rotation_deform(tets, paper);
