@@ -235,3 +235,30 @@ TEST_CASE("the three axes solved in parallel give the bit-identical map of a one
   CHECK(serial.stats.planarity_error == parallel.stats.planarity_error);
   check_planes(parallel);
 }
+
+TEST_CASE("the mean value Laplace solve: diagonal preconditioner, incomplete LU fallback, same map", "[position]") {
+  // The final solve tries BiCGSTAB with the diagonal preconditioner first and falls back to the incomplete
+  // LU when its iteration cap is hit; both solve one system to a relative residual of 1e-12, so the maps
+  // agree to far below the hex edge, and the fallback really runs when the cap is too small.
+  PositionDeformParams p;
+  p.edge_length = 0.05;
+  p.untangle_iterations = 0;  // compare the solves themselves
+  SurfaceMesh l = test::voxel_surface({{0, 0, 0}, {1, 0, 0}, {0, 0, 1}}, 0.5);
+  Run jac = run_pipeline(l, 0.05, p);
+  CHECK(jac.stats.final_ilu_fallbacks == 0);
+  CHECK(jac.stats.final_iterations > 0);
+  PositionDeformParams q = p;
+  q.final_jacobi_iterations = 0;
+  Run ilu = run_pipeline(l, 0.05, q);
+  CHECK(ilu.stats.final_ilu_fallbacks == 3);
+  PositionDeformParams capped = p;
+  capped.final_jacobi_iterations = 1;
+  Run cap = run_pipeline(l, 0.05, capped);
+  CHECK(cap.stats.final_ilu_fallbacks == 3);
+  const double h = jac.map.edge_length;
+  REQUIRE(jac.map.U.rows() == ilu.map.U.rows());
+  CHECK((jac.map.U - ilu.map.U).cwiseAbs().maxCoeff() < 1e-8 * h);
+  CHECK((cap.map.U - ilu.map.U).cwiseAbs().maxCoeff() < 1e-8 * h);
+  CHECK(jac.map.chart_plane == ilu.map.chart_plane);
+  check_planes(jac);
+}
