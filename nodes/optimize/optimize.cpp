@@ -37,6 +37,7 @@ struct PhaseTimer {
 
 using optimize_detail::chi;
 using optimize_detail::kCorners;
+using optimize_detail::winslow_term;
 
 /// Normalised corner determinants of a hex (edge vectors over `scale`).
 double min_corner_det(const std::array<Vec3, 8>& p, double scale) {
@@ -692,7 +693,7 @@ double hex_winslow_energy(const std::array<Eigen::Vector3d, 8>& p, double scale,
     J.col(0) = (p[size_t(c[1])] - p[size_t(c[0])]) / scale;
     J.col(1) = (p[size_t(c[2])] - p[size_t(c[0])]) / scale;
     J.col(2) = (p[size_t(c[3])] - p[size_t(c[0])]) / scale;
-    e += J.squaredNorm() / (3.0 * std::pow(chi(J.determinant(), eps), 2.0 / 3.0));
+    e += winslow_term(J, eps, nullptr);
   }
   return e;
 }

@@ -30,7 +30,10 @@ constexpr int kVolumeTets[5][4] = {{0, 1, 3, 4}, {1, 2, 3, 6}, {1, 3, 4, 6}, {1,
 // det[a b c] / (|a| |b| |c|), 0 when a vector has (almost) no length, clamped to [-1, 1].
 double scaled(const Vec3& a, const Vec3& b, const Vec3& c) {
   const double det = a.dot(b.cross(c));
-  const double len = a.norm() * b.norm() * c.norm();
+  // One square root of the product of the squared lengths instead of three (the optimizer evaluates this
+  // nine times per hex per trial move); the product of the norms where that product would under- or overflow.
+  const double len2 = a.squaredNorm() * b.squaredNorm() * c.squaredNorm();
+  const double len = len2 > 1e-290 && len2 < 1e290 ? std::sqrt(len2) : a.norm() * b.norm() * c.norm();
   const double s = len > 1e-300 ? det / len : 0.0;
   return std::clamp(s, -1.0, 1.0);
 }
