@@ -41,8 +41,11 @@ struct PositionDeformParams {
   double edge_length = 0.01;        ///< hex edge length h, fraction of the input's bbox diagonal (§6: 1 %), [1e-4, 0.5]
   double distance_weight = 1.0;     ///< scale s of the distance-preservation constraints (0 disables them), [0, 1e6]
   std::string final_solve = "mvc_laplace";  ///< "mvc_laplace" (§5.2) or "poisson"
-  int final_jacobi_iterations = 3000;  ///< mvc_laplace: BiCGSTAB iterations with the diagonal preconditioner before the
-                                       ///< incomplete LU takes over (0 = incomplete LU at once), [0, 1e6]
+  int final_jacobi_iterations = 0;     ///< mvc_laplace: BiCGSTAB iterations with the diagonal preconditioner before the
+                                       ///< incomplete LU takes over (0 = incomplete LU at once), [0, 1e6]. Faster (the
+                                       ///< 200k benchmark's stage 3.2 s against 4.9-5.4 s) but off by default: the map's
+                                       ///< untangling amplifies the solves' last-bit differences, and the meshes change
+                                       ///< (position_deform.cpp, at the final solve)
   int untangle_iterations = 600;    ///< L-BFGS iterations of the map's untangling (untangle_map.h); 0 = keep the folds, [0, 1e6]
   int untangle_rings = 2;           ///< the untangling moves the inverted tets' vertices grown by this many rings, [0, 50]
   double untangle_seconds = 0;      ///< wall-time cap of the untangling (0 = none; a cap that is hit makes runs load-dependent), [0, 3600]
@@ -66,7 +69,7 @@ struct PositionDeformStats {
   double distortion_max = 0;
   double planarity_error = 0;           ///< max distance of a chart vertex from its plane / bbox diagonal (0 by construction)
   int final_iterations = 0;             ///< BiCGSTAB iterations of the mvc_laplace final solves (three axes)
-  int final_ilu_fallbacks = 0;          ///< axes whose final solve needed the incomplete LU preconditioner
+  int final_ilu_axes = 0;               ///< axes whose final solve used the incomplete LU preconditioner
   double seconds_poisson = 0, seconds_final = 0;  ///< summed over the three axes (which run in parallel)
 };
 

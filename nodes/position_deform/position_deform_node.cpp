@@ -18,7 +18,7 @@ const bool registered = register_node(make_node<P>(
         .add_choice("final_solve", &P::final_solve, {"mvc_laplace", "poisson"},
                     "final solve with pinned charts: mean value Laplace (paper) or Poisson")
         .add("final_jacobi_iterations", &P::final_jacobi_iterations,
-             "mvc_laplace: BiCGSTAB iterations with the diagonal preconditioner before the incomplete LU (0 = ILU at once)", 0, 1000000)
+             "mvc_laplace: BiCGSTAB iterations with the diagonal preconditioner before the incomplete LU (0 = ILU at once, the default: see position_deform.h)", 0, 1000000)
         .add("untangle_iterations", &P::untangle_iterations, "L-BFGS iterations of the map's untangling (0 = keep the folds)", 0, 1000000)
         .add("untangle_rings", &P::untangle_rings, "the untangling moves the inverted tets' vertices grown by this many rings", 0, 50)
         .add("untangle_seconds", &P::untangle_seconds, "wall-time cap of the untangling (0 = none)", 0.0, 3600.0)
@@ -55,7 +55,7 @@ const bool registered = register_node(make_node<P>(
       j["seconds_poisson"] = s.seconds_poisson;
       j["seconds_final"] = s.seconds_final;
       j["final_iterations"] = s.final_iterations;
-      j["final_ilu_fallbacks"] = s.final_ilu_fallbacks;
+      j["final_ilu_axes"] = s.final_ilu_axes;
       if (s.flipped_after_rounding > 0)
         ctx.warn(std::to_string(s.flipped_after_rounding) + " same-axis chart pairs could not keep their order after rounding");
       if (s.merged_same_axis_charts > 0)
