@@ -237,9 +237,10 @@ TEST_CASE("the three axes solved in parallel give the bit-identical map of a one
 }
 
 TEST_CASE("the mean value Laplace solve: diagonal preconditioner, incomplete LU fallback, same map", "[position]") {
-  // The final solve tries BiCGSTAB with the diagonal preconditioner first and falls back to the incomplete
-  // LU when its iteration cap is hit; both solve one system to a relative residual of 1e-12, so the maps
-  // agree to far below the hex edge, and the fallback really runs when the cap is too small.
+  // With final_jacobi_iterations > 0 the final solve tries BiCGSTAB with the diagonal preconditioner first
+  // and falls back to the incomplete LU when its iteration cap is hit; both solve one system to a relative
+  // residual of 1e-12, so the maps agree to far below the hex edge, and the fallback really runs when the
+  // cap is too small.
   PositionDeformParams p;
   p.edge_length = 0.05;
   p.untangle_iterations = 0;  // compare the solves themselves
