@@ -367,9 +367,11 @@ Eigen::Vector4d coherent_quaternion(const Eigen::Matrix3d& R) {
   return q.normalized();
 }
 
-Eigen::Matrix3d axis_aligning_rotation(const Eigen::Vector3d& n) {
-  const Eigen::Vector3d a = label_dir(closest_label(n));
-  // Rodrigues for the rotation about n x a by the angle between them; c = n.a >= 1/sqrt(3).
+Eigen::Matrix3d axis_aligning_rotation(const Eigen::Vector3d& n) { return axis_aligning_rotation(n, label_dir(closest_label(n))); }
+
+Eigen::Matrix3d axis_aligning_rotation(const Eigen::Vector3d& n, const Eigen::Vector3d& a) {
+  // Rodrigues for the rotation about n x a by the angle between them; c = n.a > 0 (>= 1/sqrt(3) for the
+  // closest axis).
   const Eigen::Vector3d v = n.cross(a);
   const double c = n.dot(a);
   Eigen::Matrix3d K;
@@ -480,12 +482,15 @@ RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformP
       const double len = nv.norm();
       feature[b] = is_feature || !(len > 0);
       known[b] = !feature[b];
-      // 2-3. §4.1: minimal axis-aligning rotation, coherently oriented.
-      target[b] = feature[b] ? identity : coherent_quaternion(axis_aligning_rotation(nv / len));
+      // 2-3. §4.1: minimal axis-aligning rotation towards the closest direction, coherently oriented; the
+      // flattening below uses that direction's label.
       blabel[b] = -1;
-      if (!feature[b]) {  // the direction the rotation above targets
-        blabel[b] = closest_label(nv);
-        bangle[b] = std::acos(std::min(1.0, std::abs(nv[label_axis(blabel[b])]) / len)) * 180.0 / kPi;
+      target[b] = identity;
+      if (!feature[b]) {
+        const Eigen::Vector3d un = nv / len;
+        blabel[b] = closest_label(un);
+        bangle[b] = std::acos(std::min(1.0, std::abs(un[label_axis(blabel[b])]))) * 180.0 / kPi;
+        target[b] = coherent_quaternion(axis_aligning_rotation(un, label_dir(blabel[b])));
       }
     });
     st.feature_vertices = static_cast<int>(std::count(feature.begin(), feature.end(), 1));

@@ -148,6 +148,10 @@ Eigen::Vector4d coherent_quaternion(const Eigen::Matrix3d& R);
 /// \pre |n| = 1
 Eigen::Matrix3d axis_aligning_rotation(const Eigen::Vector3d& n);
 
+/// The same towards a given axis direction a (label_dir of a label whose direction is within 90° of n).
+/// \pre |n| = 1, n.a > 0
+Eigen::Matrix3d axis_aligning_rotation(const Eigen::Vector3d& n, const Eigen::Vector3d& a);
+
 /// Boundary faces of a tet mesh: faces used by exactly one tet, oriented outward.
 /// \return F  #F by 3  \pre T positively oriented, indices in [0, nV)
 RowMatrixX3i boundary_faces(const RowMatrixX4i& T, int nV);
