@@ -181,7 +181,7 @@ void write_segmentation(Writer& w, const PolyCubeSegmentation& s) {
     w.pod(std::int32_t(c.valence));
     w.vec(c.charts);
   }
-  for (int v : {s.splits_multi_orientation, s.splits_wedge, s.splits_island, s.repaired_corners, s.removed_small,
+  for (int v : {s.splits_multi_orientation, s.splits_wedge, s.splits_ramp, s.splits_island, s.repaired_corners, s.removed_small,
                 s.smoothing_iterations})
     w.pod(std::int32_t(v));
   w.flag(s.valid);
@@ -222,7 +222,7 @@ PolyCubeSegmentation read_segmentation(Reader& r) {
     c.valence = r.pod<std::int32_t>();
     c.charts = r.vec<int>();
   }
-  for (int* v : {&s.splits_multi_orientation, &s.splits_wedge, &s.splits_island, &s.repaired_corners,
+  for (int* v : {&s.splits_multi_orientation, &s.splits_wedge, &s.splits_ramp, &s.splits_island, &s.repaired_corners,
                  &s.removed_small, &s.smoothing_iterations})
     *v = r.pod<std::int32_t>();
   s.valid = r.flag();

@@ -361,7 +361,7 @@ int chart_at(const Surface& s, const std::vector<int>& chart, int v, const std::
 struct State {
   std::vector<int> label;      // #F
   std::vector<char> band;      // #F: inserted by a split
-  int splits_multi = 0, splits_wedge = 0, splits_island = 0, repaired_corners = 0, removed_small = 0;
+  int splits_multi = 0, splits_wedge = 0, splits_ramp = 0, splits_island = 0, repaired_corners = 0, removed_small = 0;
 };
 
 /// §5.1 multi-orientation charts: a chart touching a chart of the opposite direction along a
@@ -438,7 +438,22 @@ struct Extremum {
   int chart_a = -1, chart_b = -1;
   double severity = 0;    // area of the triangle with the neighbouring extrema / endpoints
   double width = 0;       // 2D distance of the wedge endpoints in the plane of the two chart axes
+  int cut_chart = -1;     // the chart to cut when known (a ramp), else the concave one of chart_a, chart_b
 };
+
+/// A smoothed copy of a PolyCube edge's vertex positions (`smoothing` passes of 3-point averaging,
+/// endpoints fixed), so that the jaggedness of the triangle boundary does not count as a turn.
+std::vector<Vec3> smoothed_edge(const Surface& s, const PolyCubeEdge& e, int smoothing) {
+  const size_t n = e.vertices.size();
+  std::vector<Vec3> p(n);
+  for (size_t i = 0; i < n; ++i) p[i] = s.pos(e.vertices[i]);
+  for (int it = 0; it < smoothing; ++it) {
+    std::vector<Vec3> q = p;
+    for (size_t i = 1; i + 1 < n; ++i) q[i] = (p[i - 1] + p[i] + p[i + 1]) / 3;
+    p.swap(q);
+  }
+  return p;
+}
 
 /// Extrema of the smoothed chart edges: points where an edge doubles back along the direction it
 /// should run in (the axis neither chart maps to), found with a hysteresis of `depth`.
@@ -452,13 +467,7 @@ std::vector<Extremum> find_extrema(const Surface& s, const Structure& S, const s
     if (e.closed || ax_a == ax_b || e.vertices.size() < 3) continue;
     int c = 3 - ax_a - ax_b;
     const size_t n = e.vertices.size();
-    std::vector<Vec3> p(n);
-    for (size_t i = 0; i < n; ++i) p[i] = s.pos(e.vertices[i]);
-    for (int it = 0; it < smoothing; ++it) {  // smoothed copy, endpoints fixed
-      std::vector<Vec3> q = p;
-      for (size_t i = 1; i + 1 < n; ++i) q[i] = (p[i - 1] + p[i] + p[i + 1]) / 3;
-      p.swap(q);
-    }
+    const std::vector<Vec3> p = smoothed_edge(s, e, smoothing);
     // zig-zag: confirm a candidate extremum once the edge has come back by `depth`
     std::vector<size_t> ext;
     int dir = 0;
@@ -509,7 +518,8 @@ bool cut_wedge(const Surface& s, const std::vector<Vec3>& normal, const Structur
                const std::vector<Extremum>& all, const PolyCubeSegmentParams& p, State& st) {
   const int a = x.tip;
   double r = std::max(0.25 * x.width, 2 * s.mean_edge);
-  bool a_concave = area_near(s, S.chart, a, r, x.chart_a) >= area_near(s, S.chart, a, r, x.chart_b);
+  bool a_concave = x.cut_chart >= 0 ? x.cut_chart == x.chart_a
+                                    : area_near(s, S.chart, a, r, x.chart_a) >= area_near(s, S.chart, a, r, x.chart_b);
   const int W = a_concave ? x.chart_a : x.chart_b, R = a_concave ? x.chart_b : x.chart_a;
   int label_W = -1, label_R = -1;
   for (int t = 0; t < s.nf(); ++t) {
@@ -608,7 +618,7 @@ bool cut_wedge(const Surface& s, const std::vector<Vec3>& normal, const Structur
     if (!ok) continue;
     st.label.swap(trial);
     for (int t : band) st.band[t] = 1;
-    ++st.splits_wedge;
+    ++(x.cut_chart >= 0 ? st.splits_ramp : st.splits_wedge);
     return true;
   }
   return false;
@@ -629,6 +639,83 @@ void split_wedges(const Surface& s, const std::vector<Vec3>& normal, const PolyC
     bool applied = false;
     for (auto& x : todo) {
       if (cut_wedge(s, normal, S, x, ext, p, st)) {
+        applied = true;
+        break;
+      }
+      failed_tips.insert(x.tip);
+    }
+    if (!applied) return;
+  }
+}
+
+/// Ramps (extension of §5.1, polycube_segment.h): charts whose vertices span more than `extent`
+/// along their own axis (2nd to 98th percentile of the deformed coordinate). Each crossing of the
+/// chart's middle level by one of its smoothed edges is a cut start (an Extremum with cut_chart set,
+/// severity = the chart's span, width 2h: a separating chart of width h).
+std::vector<Extremum> find_ramps(const Surface& s, const Structure& S, int smoothing, double extent, double h) {
+  std::vector<std::vector<int>> verts(S.n);
+  for (int t = 0; t < s.nf(); ++t)
+    for (int v : (*s.F).row(t)) verts[S.chart[t]].push_back(v);
+  std::vector<double> level(S.n, kInf), span(S.n, 0);
+  for (int c = 0; c < S.n; ++c) {
+    auto& vs = verts[c];
+    std::sort(vs.begin(), vs.end());
+    vs.erase(std::unique(vs.begin(), vs.end()), vs.end());
+    if (vs.size() < 8) continue;
+    const int ax = label_axis(S.label[c]);
+    std::vector<double> x(vs.size());
+    for (size_t i = 0; i < vs.size(); ++i) x[i] = s.pos(vs[i])[ax];
+    const size_t lo = size_t(0.02 * double(x.size())), hi = x.size() - 1 - lo;
+    std::nth_element(x.begin(), x.begin() + lo, x.end());
+    double xlo = x[lo];
+    std::nth_element(x.begin(), x.begin() + hi, x.end());
+    double xhi = x[hi];
+    if (xhi - xlo <= extent) continue;
+    span[c] = xhi - xlo;
+    level[c] = 0.5 * (xlo + xhi);
+  }
+  std::vector<Extremum> out;
+  for (auto& e : S.edges) {
+    if (e.vertices.size() < 3) continue;
+    const size_t n = e.vertices.size();
+    const std::vector<Vec3> p = smoothed_edge(s, e, smoothing);
+    for (int side = 0; side < 2; ++side) {
+      const int c = side == 0 ? e.chart_a : e.chart_b, other = side == 0 ? e.chart_b : e.chart_a;
+      if (level[c] == kInf) continue;
+      const int ax = label_axis(S.label[c]);
+      for (size_t i = 0; i + 1 < n; ++i) {
+        double u = p[i][ax] - level[c], w = p[i + 1][ax] - level[c];
+        if ((u < 0) == (w < 0)) continue;
+        Extremum x;
+        x.tip = e.vertices[std::abs(u) <= std::abs(w) ? i : i + 1];
+        x.chart_a = c;
+        x.chart_b = other;
+        x.cut_chart = c;
+        x.severity = span[c];
+        x.width = 2 * h;
+        out.push_back(x);
+      }
+    }
+  }
+  return out;
+}
+
+void split_ramps(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p, State& st) {
+  const double h = p.hex_edge_length * s.diag;
+  std::set<int> failed_tips;
+  while (st.splits_ramp < p.max_splits) {
+    throw_if_interrupted();
+    Structure S = analyse(s, st.label);
+    auto ramps = find_ramps(s, S, p.edge_smoothing_iterations, p.ramp_extent * h, h);
+    std::vector<Extremum> todo;
+    for (auto& x : ramps)
+      if (!failed_tips.count(x.tip)) todo.push_back(x);
+    // the widest span first; stable, so a chart's crossings keep the order of its edges
+    std::stable_sort(todo.begin(), todo.end(),
+                     [](const Extremum& u, const Extremum& v) { return u.severity > v.severity; });
+    bool applied = false;
+    for (auto& x : todo) {
+      if (cut_wedge(s, normal, S, x, ramps, p, st)) {
         applied = true;
         break;
       }
@@ -676,6 +763,7 @@ PolyCubeSegmentation make_result(const Surface& s, const State& st) {
   r.corners = S.corners;
   r.splits_multi_orientation = st.splits_multi;
   r.splits_wedge = st.splits_wedge;
+  r.splits_ramp = st.splits_ramp;
   r.splits_island = st.splits_island;
   r.repaired_corners = st.repaired_corners;
   r.removed_small = st.removed_small;
@@ -1061,6 +1149,7 @@ PolyCubeSegmentation segment_once(const Surface& s, const PolyCubeSegmentParams&
   const double h = p.hex_edge_length * s.diag;
   if (p.split_multi_orientation) split_multi_orientation(s, normal, h, p.max_splits, st);
   if (p.split_wedges) split_wedges(s, normal, p, st);
+  if (p.split_ramps) split_ramps(s, normal, p, st);
   if (p.final_cleanup) remove_small_invalid(s, normal, p, st);
   repair(s, normal, p, st);
   PolyCubeSegmentation r = make_result(s, st);

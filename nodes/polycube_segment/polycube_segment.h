@@ -14,6 +14,15 @@
 ///   touching at one vertex, a 4-valent corner; conjoined_twins, encrusted_cube, bimba) is no PolyCube
 ///   corner; a small patch around it relabelled to the third axis splits it into valence-3 corners.
 ///   The same search also resolves the remaining same-axis neighbours on femur and carter.
+/// - ramps (split_ramps): a chart whose deformed vertices span more than `ramp_extent` hex edges along
+///   its own axis (2nd to 98th percentile) is cut across at its middle level, by the §5.1 wedge cut (a
+///   separating chart of width h, the cheapest axis-aligned path through the chart, half price when it
+///   joins two crossings of that level) from a point where one of its edges crosses the level. The
+///   rotation-driven deformation cannot make a helical strip (a screw thread, a twisted bar) planar:
+///   it stays a ramp whose labels all agree, its edges never double back, so the wedge rule does not
+///   see it, and enforcing one plane on it folds the map. Cut, it becomes a staircase of charts, each
+///   flat, as a PolyCube of a helix must be. Runs on valid structures too (a ramp is valid but flattens
+///   badly); a cut is applied only when every chart it makes has >= 4 neighbours and none of its own axis.
 /// - small same-axis charts (with final_cleanup): a small chart beside a chart of its own axis is
 ///   spurious; if the structure is still invalid, it is removed by flood fill before the two repairs
 ///   above and the better result kept (carter at edge 0.04).
@@ -38,6 +47,8 @@ struct PolyCubeSegmentParams {
   double extremum_depth = 2.0;         ///< an edge doubles back only when it returns by this many hex edge lengths
   double wedge_min_severity = 1e-3;    ///< wedges whose triangle area is below this fraction of bbox diagonal^2 are left alone
   int max_cut_candidates = 200;        ///< cut candidates tested per wedge, cheapest first
+  bool split_ramps = true;             ///< cut charts that climb far along their own axis (extension of §5.1, below)
+  double ramp_extent = 12.0;           ///< a chart is a ramp when its vertices span more than this many hex edges along its axis
   int max_splits = 32;                 ///< upper bound on separating charts of each kind
   bool final_cleanup = true;           ///< after the splits, remove small charts with < 4 neighbours by flood fill (extension of §5.1)
   bool split_islands = true;           ///< cut a ring chart from the boundary of a chart with < 4 neighbours it encloses (extension of §5.1)

@@ -14,6 +14,7 @@ json segmentation_metrics(const PolyCubeSegmentation& s) {
   m["edges"] = s.edges.size();
   m["splits_multi_orientation"] = s.splits_multi_orientation;
   m["splits_wedge"] = s.splits_wedge;
+  m["splits_ramp"] = s.splits_ramp;
   m["splits_island"] = s.splits_island;
   m["repaired_corners"] = s.repaired_corners;
   m["removed_small"] = s.removed_small;
@@ -41,6 +42,8 @@ const bool registered = register_node(make_node<P>(
         .add("extremum_depth", &P::extremum_depth, "an edge doubles back by at least this many hex edges", 0, 1e6)
         .add("wedge_min_severity", &P::wedge_min_severity, "minimum wedge area, fraction of bbox diagonal^2", 0, 1)
         .add("max_cut_candidates", &P::max_cut_candidates, "cut candidates tested per wedge", 1, 100000)
+        .add("split_ramps", &P::split_ramps, "cut charts that climb far along their own axis (extension)")
+        .add("ramp_extent", &P::ramp_extent, "a ramp spans more than this many hex edges along its axis", 0, 1e6)
         .add("max_splits", &P::max_splits, "maximum separating charts of each kind", 0, 10000)
         .add("final_cleanup", &P::final_cleanup, "after the splits, remove small charts with < 4 neighbours")
         .add("split_islands", &P::split_islands, "cut ring charts from the boundary of a chart with < 4 neighbours")
@@ -61,7 +64,7 @@ const bool registered = register_node(make_node<P>(
                  json(s.failing_charts).dump() + ")");
       }
       return make_artefact(std::make_shared<const PolyCubeSegmentation>(std::move(s)));
-    }).with_version("2"));
+    }).with_version("3"));
 
 }  // namespace
 }  // namespace polyhex

@@ -55,6 +55,7 @@ PolyCubeSegmentation segmentation() {
   s.corners = {{2, 3, {0, 1}}};
   s.splits_multi_orientation = 1;
   s.splits_wedge = 2;
+  s.splits_ramp = 3;
   s.splits_island = 3;
   s.repaired_corners = 4;
   s.removed_small = 5;
@@ -94,6 +95,7 @@ void check_equal(const PolyCubeSegmentation& a, const PolyCubeSegmentation& b) {
   }
   CHECK(a.splits_multi_orientation == b.splits_multi_orientation);
   CHECK(a.splits_wedge == b.splits_wedge);
+  CHECK(a.splits_ramp == b.splits_ramp);
   CHECK(a.splits_island == b.splits_island);
   CHECK(a.repaired_corners == b.repaired_corners);
   CHECK(a.removed_small == b.removed_small);

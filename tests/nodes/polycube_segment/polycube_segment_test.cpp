@@ -37,9 +37,18 @@ bool is_failing(const PolyCubeSegmentation& s, int c) {
   return std::count(s.failing_charts.begin(), s.failing_charts.end(), c) == 1;
 }
 
+/// Default params without the ramp split: the knife's and the fading step's sloped faces span more than
+/// ramp_extent hex edges along their axes, so the extension would cut them too; these tests check the
+/// §5.1 rules alone (the ramp test case checks the extension).
+PolyCubeSegmentParams no_ramps() {
+  PolyCubeSegmentParams p;
+  p.split_ramps = false;
+  return p;
+}
+
 /// Segmentation with one split kind switched off and no fallback.
 PolyCubeSegmentation segment_without(const TetMesh& m, bool PolyCubeSegmentParams::*split) {
-  PolyCubeSegmentParams p;
+  PolyCubeSegmentParams p = no_ramps();
   p.*split = false;
   p.fallback_retries = 0;
   p.split_islands = false;  // the extensions would repair what the §5.1 step left
@@ -120,6 +129,7 @@ TEST_CASE("box: 6 charts, 8 corners, 12 edges, valid", "[segment]") {
   CHECK(chart_labels(s) == std::multiset<int>{0, 1, 2, 3, 4, 5});
   CHECK(s.splits_multi_orientation == 0);
   CHECK(s.splits_wedge == 0);
+  CHECK(s.splits_ramp == 0);
   CHECK(s.removed_small == 0);
   for (auto& c : s.charts) CHECK(c.neighbours.size() == 4);
   for (auto& c : s.corners) CHECK(c.valence == 3);
@@ -153,7 +163,7 @@ TEST_CASE("box rotated by 30 degrees, after rotation_deform: 6 charts", "[segmen
 TEST_CASE("multi-orientation chart (Figure 7) gets exactly one separating chart", "[segment]") {
   TetMesh k = knife();
   SECTION("split") {
-    PolyCubeSegmentation s = segment_polycube(k);
+    PolyCubeSegmentation s = segment_polycube(k, no_ramps());
     CHECK(s.valid);
     CHECK(s.splits_multi_orientation == 1);
     CHECK(s.splits_wedge == 0);
@@ -186,7 +196,7 @@ TEST_CASE("multi-orientation chart (Figure 7) gets exactly one separating chart"
 TEST_CASE("wedge (Figure 8): the concave chart gets the valid, cheapest cut", "[segment]") {
   TetMesh m = fading_step();
   SECTION("cut") {
-    PolyCubeSegmentation s = segment_polycube(m);
+    PolyCubeSegmentation s = segment_polycube(m, no_ramps());
     INFO(s.problems.size());
     CHECK(s.valid);
     CHECK(s.splits_wedge == 1);
@@ -212,10 +222,77 @@ TEST_CASE("wedge (Figure 8): the concave chart gets the valid, cheapest cut", "[
                           Catch::Contains("has 2 neighbour(s)"));
   }
   SECTION("a severity cut-off above the wedge leaves it alone") {
-    PolyCubeSegmentParams p;
+    PolyCubeSegmentParams p = no_ramps();
     p.wedge_min_severity = 0.5;
     p.fallback_retries = 0;
     CHECK(segment_polycube(m, p).splits_wedge == 0);
+  }
+}
+
+/// Span (2nd to 98th percentile) of chart c's vertices along its own axis.
+double chart_span(const TetMesh& m, const PolyCubeSegmentation& s, int c) {
+  std::set<int> vs;
+  for (int t = 0; t < s.F.rows(); ++t)
+    if (s.chart[t] == c)
+      for (int k = 0; k < 3; ++k) vs.insert(s.F(t, k));
+  std::vector<double> x;
+  for (int v : vs) x.push_back(m.V(v, s.charts[c].label / 2));
+  std::sort(x.begin(), x.end());
+  size_t lo = size_t(0.02 * double(x.size()));
+  return x[x.size() - 1 - lo] - x[lo];
+}
+
+TEST_CASE("ramp: a bar whose top and bottom climb 1 over its length 4 is cut into a staircase", "[segment]") {
+  // [0,4]x[0,0.4]x[0,0.4] sheared z += x / 4: the Z faces tilt by 14 degrees (labels stay +-Z) and span
+  // ~24 hex edges (h = 1 % of the diagonal 4.26) along Z; no chart edge doubles back, so the wedge rule
+  // does not see them
+  TetMesh m = voxel_tets({80, 8, 8}, 0.05, [](int, int, int) { return true; },
+                         [](const Point& q) { return Point(q.x(), q.y(), q.z() + 0.25 * q.x()); });
+  const double h = 0.01 * (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm();
+  PolyCubeSegmentParams p;
+  p.fallback_retries = 0;
+  SECTION("split") {
+    PolyCubeSegmentation s = segment_polycube(m, p);
+    INFO(s.problems.size());
+    CHECK(s.valid);
+    CHECK(s.splits_ramp == 2);  // the top and the bottom, once each
+    CHECK(s.splits_wedge == 0);
+    // each Z face became two flat pieces joined by an X riser: 10 charts, a stepped bar
+    CHECK(chart_labels(s) == std::multiset<int>{0, 1, 1, 0, 2, 3, 4, 4, 5, 5});
+    for (size_t c = 0; c < s.charts.size(); ++c) {
+      INFO("chart " << c << " label " << s.charts[c].label);
+      CHECK(chart_span(m, s, int(c)) <= p.ramp_extent * h);
+      CHECK(s.charts[c].neighbours.size() >= 4);
+    }
+    // the risers face the way the bar climbs: the top's riser -X (the high piece lies at larger x),
+    // the bottom's +X
+    int risers = 0;
+    for (size_t c = 0; c < s.charts.size(); ++c) {
+      if (s.charts[c].label / 2 != 0 || !s.charts[c].separating) continue;
+      ++risers;
+      double z = 0;
+      int n = 0;
+      for (int t = 0; t < s.F.rows(); ++t)
+        if (s.chart[t] == int(c))
+          for (int k = 0; k < 3; ++k, ++n) z += m.V(s.F(t, k), 2);
+      bool top = z / n > 0.2 + 0.25 * 2;  // above the bar's axis at its middle
+      CHECK(s.charts[c].label == (top ? 1 : 0));
+      CHECK(s.charts[c].area < 0.2);
+    }
+    CHECK(risers == 2);
+  }
+  SECTION("without the ramp split: 6 valid charts, the Z ones far from flat") {
+    p.split_ramps = false;
+    PolyCubeSegmentation s = segment_polycube(m, p);
+    CHECK(s.valid);
+    CHECK(s.charts.size() == 6);
+    CHECK(s.splits_ramp == 0);
+    for (size_t c = 0; c < s.charts.size(); ++c)
+      if (s.charts[c].label / 2 == 2) CHECK(chart_span(m, s, int(c)) > 0.9);
+  }
+  SECTION("a span threshold above the ramp leaves it alone") {
+    p.ramp_extent = 30;
+    CHECK(segment_polycube(m, p).splits_ramp == 0);
   }
 }
 
@@ -359,11 +436,12 @@ TEST_CASE("polycube_segment node: metrics, VTK output and failure", "[segment]")
   bad.items.push_back(make_artefact(fading_step()));
   NodeContext ctx2 = ctx;
   ctx2.metrics = json::object();
-  json strict = spec->check_params(json{{"split_wedges", false}, {"fallback_retries", 0}, {"split_islands", false}, {"repair_corners", false}}, "seg");
+  json strict = spec->check_params(json{{"split_wedges", false}, {"split_ramps", false}, {"fallback_retries", 0}, {"split_islands", false}, {"repair_corners", false}}, "seg");
   CHECK_THROWS_WITH(spec->run(strict, bad, ctx2), Catch::Contains("has 2 neighbour(s)"));
   NodeContext ctx3 = ctx2;
   ctx3.warnings.clear();
   json lenient = spec->check_params(json{{"split_wedges", false},
+                                              {"split_ramps", false},
                                               {"fallback_retries", 0},
                                               {"split_islands", false},
                                               {"repair_corners", false},
