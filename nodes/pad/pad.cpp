@@ -212,11 +212,16 @@ HexMesh remove_boundary_doublets(const HexMesh& mesh, long* doublets, long* remo
       if (valence[v] > 0 && valence[v] <= 2) doublet[v] = 1, ++n;
     if (round == 0) found = n;
     if (n == 0) break;
-    // the candidate hex of each doublet (boundary faces come in (hex, face) order, so hexes in index order)
+    // the candidate hexes of each doublet, preferred first: most boundary faces, then the lowest corner
+    // scaled Jacobian, then the lowest index (boundary faces come in (hex, face) order)
     const BoundaryFaces bf = boundary_faces(cur);
     const std::vector<int>& bfaces = bf.faces_of_hex;
-    std::vector<int> best(size_t(cur.V.rows()), -1);
-    std::vector<double> best_sj(size_t(cur.V.rows()), 0.0);
+    struct Cand {
+      int faces;
+      double sj;
+      int hex;
+    };
+    std::vector<std::vector<Cand>> cands(size_t(cur.V.rows()));
     for (size_t i = 0; i < bf.quad.size();) {
       const int h = bf.hex[i];
       std::vector<int> touched;
@@ -224,31 +229,41 @@ HexMesh remove_boundary_doublets(const HexMesh& mesh, long* doublets, long* remo
         for (int v : bf.quad[i])
           if (doublet[size_t(v)]) touched.push_back(v);
       if (touched.empty()) continue;
+      std::sort(touched.begin(), touched.end());
+      touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
       const double sj = hex_scaled_jacobian(hex_points(cur.V, cur.H, h)).corner_min;
-      for (int v : touched) {
-        const int b = best[size_t(v)];
-        if (b < 0 || bfaces[size_t(h)] > bfaces[size_t(b)] || (bfaces[size_t(h)] == bfaces[size_t(b)] && sj < best_sj[size_t(v)]))
-          best[size_t(v)] = h, best_sj[size_t(v)] = sj;
-      }
+      for (int v : touched) cands[size_t(v)].push_back({bfaces[size_t(h)], sj, h});
     }
+    for (auto& c : cands)
+      std::sort(c.begin(), c.end(), [](const Cand& a, const Cand& b) {
+        return a.faces != b.faces ? a.faces > b.faces : a.sj != b.sj ? a.sj < b.sj : a.hex < b.hex;
+      });
     std::vector<char> drop(size_t(cur.H.rows()), 0);
     long k = 0;
-    for (size_t v = 0; v < best.size(); ++v)
-      if (doublet[v] && best[v] >= 0 && !drop[size_t(best[v])]) drop[size_t(best[v])] = 1, ++k;
+    for (size_t v = 0; v < cands.size(); ++v)
+      if (doublet[v] && !cands[v].empty() && !drop[size_t(cands[v][0].hex)]) drop[size_t(cands[v][0].hex)] = 1, ++k;
     if (k == 0 || k == cur.H.rows()) break;
     HexMesh next = without_hexes(cur, drop);
     std::vector<int> next_valence;
     long next_bad = boundary_valence(next, next_valence);
     if (next_bad > bad) {
-      // together they make the boundary non-manifold: keep those that do not, one at a time (in index order)
+      // together they make the boundary non-manifold: per doublet (in vertex order), the first of its
+      // candidates whose removal, with those kept so far, does not (a preferred hex whose removal opens a
+      // non-manifold edge can have a partner across the doublet whose removal does not)
       std::vector<char> ok(drop.size(), 0);
       k = 0;
-      for (size_t h = 0; h < drop.size(); ++h) {
-        if (!drop[h]) continue;
-        throw_if_interrupted();
-        ok[h] = 1;
-        if (boundary_valence(without_hexes(cur, ok), next_valence) <= bad) ++k;
-        else ok[h] = 0;
+      for (size_t v = 0; v < cands.size(); ++v) {
+        if (!doublet[v]) continue;
+        for (const Cand& c : cands[v]) {
+          if (ok[size_t(c.hex)]) break;  // resolved by an earlier removal
+          throw_if_interrupted();
+          ok[size_t(c.hex)] = 1;
+          if (boundary_valence(without_hexes(cur, ok), next_valence) <= bad) {
+            ++k;
+            break;
+          }
+          ok[size_t(c.hex)] = 0;
+        }
       }
       if (k == 0) break;
       next = without_hexes(cur, ok);

@@ -66,8 +66,10 @@ HexMesh peel_boundary_hexes(const HexMesh& mesh, double max_sj, int rounds, long
 /// padding the two layer hexes on them share two faces and one of them is always inverted or flat there
 /// (the determinants at the doublet have opposite signs). Per doublet, the incident hex with a boundary
 /// face at it that has the most boundary faces (then the lowest corner scaled Jacobian, then the lowest
-/// index) is removed; repeated while doublets remain (at most 5 rounds); a removal that would make a
-/// boundary edge non-manifold (that was not) is skipped. Unused vertices are dropped.
+/// index) is removed; repeated while doublets remain (at most 5 rounds). When these removals together
+/// would make a boundary edge non-manifold (that was not), each doublet in turn takes the first of its
+/// candidates, in the same order, whose removal (with those taken so far) does not; a doublet with no
+/// such candidate is left. Unused vertices are dropped.
 /// \param mesh  conforming hex mesh   \param doublets, removed  out (optional): counts
 /// \return the mesh without those hexes (the input itself if there is no doublet)
 HexMesh remove_boundary_doublets(const HexMesh& mesh, long* doublets = nullptr, long* removed = nullptr);

@@ -40,7 +40,7 @@ const bool registered = register_node(make_node<P>(
         ctx.warn(std::to_string(s.nonmanifold_left) + " non-manifold boundary edges / vertices left before padding");
       if (s.inverted > 0) ctx.warn(std::to_string(s.inverted) + " hexes inverted after padding (optimize untangles them)");
       return make_artefact(std::move(out));
-    }).with_version("4"));
+    }).with_version("5"));
 
 }  // namespace
 }  // namespace polyhex
