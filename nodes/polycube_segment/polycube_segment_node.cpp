@@ -28,7 +28,7 @@ json segmentation_metrics(const PolyCubeSegmentation& s) {
 
 const bool registered = register_node(make_node<P>(
     "polycube_segment/default",
-    "PolyCube structure of the deformed tet mesh (§5.1): labels, charts, clean-up, multi-orientation and wedge splits",
+    "PolyCube structure of the deformed tet mesh (§5.1): labels, charts, clean-up, multi-orientation, wedge and ramp splits",
     ParamSet<P>()
         .add("smoothing_iterations", &P::smoothing_iterations, "normal smoothing passes before labelling", 0, 1000)
         .add("hex_edge_length", &P::hex_edge_length, "target hex edge, fraction of bbox diagonal (separating chart width)",
