@@ -618,27 +618,32 @@ bool cut_wedge(const Surface& s, const std::vector<Vec3>& normal, const Structur
     if (!ok) continue;
     st.label.swap(trial);
     for (int t : band) st.band[t] = 1;
-    ++(x.cut_chart >= 0 ? st.splits_ramp : st.splits_wedge);
     return true;
   }
   return false;
 }
 
-void split_wedges(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p, State& st) {
-  const double h = p.hex_edge_length * s.diag;
+/// The cut loop shared by wedges and ramps: analyse the structure, find the cut starts (`find`: all of
+/// them, the cut's cost pairs starts among them), try those `eligible` and not failed before in
+/// decreasing severity (§5.1), apply the first valid cut (cut_wedge) and count it; until none applies or
+/// `count` reaches p.max_splits.
+template <class Find, class Eligible>
+void cut_repeatedly(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p, State& st,
+                    int& count, Find find, Eligible eligible) {
   std::set<int> failed_tips;
-  while (st.splits_wedge < p.max_splits) {
+  while (count < p.max_splits) {
     throw_if_interrupted();
     Structure S = analyse(s, st.label);
-    auto ext = find_extrema(s, S, st.label, p.edge_smoothing_iterations, p.extremum_depth * h);
+    const std::vector<Extremum> all = find(S);
     std::vector<Extremum> todo;
-    for (auto& x : ext)
-      if (x.severity >= p.wedge_min_severity * s.diag * s.diag && !failed_tips.count(x.tip)) todo.push_back(x);
-    // §5.1: extrema in decreasing order of severity
-    std::sort(todo.begin(), todo.end(), [](const Extremum& u, const Extremum& v) { return u.severity > v.severity; });
+    for (auto& x : all)
+      if (eligible(x) && !failed_tips.count(x.tip)) todo.push_back(x);
+    // stable: equal severities keep the order of the search (a ramp's crossings, edge by edge)
+    std::stable_sort(todo.begin(), todo.end(), [](const Extremum& u, const Extremum& v) { return u.severity > v.severity; });
     bool applied = false;
     for (auto& x : todo) {
-      if (cut_wedge(s, normal, S, x, ext, p, st)) {
+      if (cut_wedge(s, normal, S, x, all, p, st)) {
+        ++count;
         applied = true;
         break;
       }
@@ -646,6 +651,14 @@ void split_wedges(const Surface& s, const std::vector<Vec3>& normal, const PolyC
     }
     if (!applied) return;
   }
+}
+
+void split_wedges(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p, State& st) {
+  const double h = p.hex_edge_length * s.diag, min_severity = p.wedge_min_severity * s.diag * s.diag;
+  cut_repeatedly(
+      s, normal, p, st, st.splits_wedge,
+      [&](const Structure& S) { return find_extrema(s, S, st.label, p.edge_smoothing_iterations, p.extremum_depth * h); },
+      [&](const Extremum& x) { return x.severity >= min_severity; });
 }
 
 /// Ramps (extension of §5.1, polycube_segment.h): charts whose vertices span more than `extent`
@@ -676,7 +689,7 @@ std::vector<Extremum> find_ramps(const Surface& s, const Structure& S, int smoot
   }
   std::vector<Extremum> out;
   for (auto& e : S.edges) {
-    if (e.vertices.size() < 3) continue;
+    if (e.vertices.size() < 3 || (level[e.chart_a] == kInf && level[e.chart_b] == kInf)) continue;
     const size_t n = e.vertices.size();
     const std::vector<Vec3> p = smoothed_edge(s, e, smoothing);
     for (int side = 0; side < 2; ++side) {
@@ -702,27 +715,10 @@ std::vector<Extremum> find_ramps(const Surface& s, const Structure& S, int smoot
 
 void split_ramps(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p, State& st) {
   const double h = p.hex_edge_length * s.diag;
-  std::set<int> failed_tips;
-  while (st.splits_ramp < p.max_splits) {
-    throw_if_interrupted();
-    Structure S = analyse(s, st.label);
-    auto ramps = find_ramps(s, S, p.edge_smoothing_iterations, p.ramp_extent * h, h);
-    std::vector<Extremum> todo;
-    for (auto& x : ramps)
-      if (!failed_tips.count(x.tip)) todo.push_back(x);
-    // the widest span first; stable, so a chart's crossings keep the order of its edges
-    std::stable_sort(todo.begin(), todo.end(),
-                     [](const Extremum& u, const Extremum& v) { return u.severity > v.severity; });
-    bool applied = false;
-    for (auto& x : todo) {
-      if (cut_wedge(s, normal, S, x, ramps, p, st)) {
-        applied = true;
-        break;
-      }
-      failed_tips.insert(x.tip);
-    }
-    if (!applied) return;
-  }
+  cut_repeatedly(
+      s, normal, p, st, st.splits_ramp,
+      [&](const Structure& S) { return find_ramps(s, S, p.edge_smoothing_iterations, p.ramp_extent * h, h); },
+      [](const Extremum&) { return true; });
 }
 
 // ---------------------------------------------------------------------------------------------

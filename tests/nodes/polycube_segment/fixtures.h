@@ -6,9 +6,11 @@
 #include <algorithm>
 #include <array>
 #include <functional>
+#include <set>
 #include <vector>
 
 #include "nodes/artefacts/meshes.h"
+#include "nodes/artefacts/polycube.h"
 
 namespace polyhex::test {
 
@@ -110,6 +112,20 @@ inline TetMesh extruded_triangle_tets(const Eigen::Vector2d& P0, const Eigen::Ve
 inline TetMesh transformed(TetMesh m, const Eigen::Matrix3d& R) {
   for (int v = 0; v < m.V.rows(); ++v) m.V.row(v) = (R * m.V.row(v).transpose()).transpose();
   return m;
+}
+
+/// Span (2nd to 98th percentile) of chart c's vertices along its own axis, in the positions of m (the
+/// mesh the segmentation was made on): what polycube_segment's ramp rule measures.
+inline double chart_span(const TetMesh& m, const PolyCubeSegmentation& s, int c) {
+  std::set<int> vs;
+  for (int t = 0; t < s.F.rows(); ++t)
+    if (s.chart[t] == c)
+      for (int k = 0; k < 3; ++k) vs.insert(s.F(t, k));
+  std::vector<double> x;
+  for (int v : vs) x.push_back(m.V(v, label_axis(s.charts[size_t(c)].label)));
+  std::sort(x.begin(), x.end());
+  const size_t lo = size_t(0.02 * double(x.size()));
+  return x[x.size() - 1 - lo] - x[lo];
 }
 
 }  // namespace polyhex::test

@@ -6,12 +6,12 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
-#include <set>
 
 #include "nodes/io/surface_io.h"
 #include "nodes/polycube_segment/polycube_segment.h"
 #include "nodes/rotation_deform/rotation_deform.h"
 #include "nodes/tetrahedralize/tetgen.h"
+#include "tests/nodes/polycube_segment/fixtures.h"
 
 using namespace polyhex;
 
@@ -21,25 +21,14 @@ double hex_edge(const TetMesh& m) {
   return PolyCubeSegmentParams{}.hex_edge_length * (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm();
 }
 
-/// Largest span (2nd to 98th percentile) of a chart's vertices along its own axis.
+/// Largest span of a chart along its own axis (fixtures.h chart_span).
 double max_chart_span(const TetMesh& m, const PolyCubeSegmentation& s) {
   double out = 0;
-  for (size_t c = 0; c < s.charts.size(); ++c) {
-    std::set<int> vs;
-    for (int t = 0; t < s.F.rows(); ++t)
-      if (s.chart[t] == int(c))
-        for (int k = 0; k < 3; ++k) vs.insert(s.F(t, k));
-    std::vector<double> x;
-    for (int v : vs) x.push_back(m.V(v, s.charts[c].label / 2));
-    std::sort(x.begin(), x.end());
-    const size_t lo = size_t(0.02 * double(x.size()));
-    out = std::max(out, x[x.size() - 1 - lo] - x[lo]);
-  }
+  for (size_t c = 0; c < s.charts.size(); ++c) out = std::max(out, test::chart_span(m, s, int(c)));
   return out;
 }
 
 }  // namespace
-
 
 TEST_CASE("shared surfaces: tetrahedralize, rotation_deform, polycube_segment give valid structures",
           "[segment][shared]") {

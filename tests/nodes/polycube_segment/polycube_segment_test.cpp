@@ -229,19 +229,6 @@ TEST_CASE("wedge (Figure 8): the concave chart gets the valid, cheapest cut", "[
   }
 }
 
-/// Span (2nd to 98th percentile) of chart c's vertices along its own axis.
-double chart_span(const TetMesh& m, const PolyCubeSegmentation& s, int c) {
-  std::set<int> vs;
-  for (int t = 0; t < s.F.rows(); ++t)
-    if (s.chart[t] == c)
-      for (int k = 0; k < 3; ++k) vs.insert(s.F(t, k));
-  std::vector<double> x;
-  for (int v : vs) x.push_back(m.V(v, s.charts[c].label / 2));
-  std::sort(x.begin(), x.end());
-  size_t lo = size_t(0.02 * double(x.size()));
-  return x[x.size() - 1 - lo] - x[lo];
-}
-
 TEST_CASE("ramp: a bar whose top and bottom climb 1 over its length 4 is cut into a staircase", "[segment]") {
   // [0,4]x[0,0.4]x[0,0.4] sheared z += x / 4: the Z faces tilt by 14 degrees (labels stay +-Z) and span
   // ~24 hex edges (h = 1 % of the diagonal 4.26) along Z; no chart edge doubles back, so the wedge rule
