@@ -1,6 +1,7 @@
 // Hex mesh optimization (paper §6): untangle, max-min scaled Jacobian, shape improvement. See optimize.h.
 #include "nodes/optimize/optimize.h"
 #include "nodes/optimize/hex_corners.h"
+#include "nodes/artefacts/cell_rings.h"
 #include "nodes/artefacts/hex_topology.h"
 #include "nodes/optimize/untangle_global.h"
 
@@ -624,11 +625,78 @@ class Optimizer {
     }
   }
 
+  /// (c0) the global average ascent (raise_average), kept only if it inverts nothing, keeps the minimum and
+  /// raises the average. Boundary vertices stay: the sweeps of (c) slide them (tangent moves across a crease
+  /// cut it, as in smooth_worst).
+  void average_global() {
+    constexpr int kRevertRounds = 10;
+    if (p_.average_iterations <= 0 || out_of_time()) return;
+    const auto q = all_quality();
+    double min0 = 1, sum0 = 0;
+    std::vector<char> seeds(size_t(H_.rows()), 0), surf, fixed;
+    for (size_t h = 0; h < q.size(); ++h) {
+      if (q[h].corner_min <= 0) return;  // the barrier needs an untangled mesh
+      min0 = std::min(min0, q[h].sj);
+      sum0 += q[h].sj;
+      seeds[h] = q[h].sj < p_.average_below_sj;
+    }
+    GlobalUntangleParams gp = descent_setup(true, surf, fixed);
+    gp.rings = p_.average_rings;
+    // the work cap: iterations x hexes of the region (those with a free vertex of the seeds grown by the rings)
+    const std::vector<char> grown = cell_ring_region(H_, V_.rows(), p_.average_rings, [&](Eigen::Index h) { return seeds[size_t(h)] != 0; });
+    std::vector<char> moves(size_t(V_.rows()), 0);
+    for (size_t v = 0; v < moves.size(); ++v) moves[v] = grown[v] && !fixed[v];
+    double region = 0;
+    for (Eigen::Index h = 0; h < H_.rows(); ++h) {
+      bool any = false;
+      for (int k = 0; k < 8 && !any; ++k) any = moves[size_t(H_(h, k))];
+      region += any;
+    }
+    if (region == 0) return;
+    gp.polish_iterations = int(std::min(double(p_.average_iterations), p_.average_work / region));
+    if (gp.polish_iterations < 1) return;
+    const RowMatrixX3d keep = V_;
+    if (!raise_average(V_, H_, surf, fixed, tree_, normals_, seeds, p_.average_barrier, p_.average_tolerance, gp)) return;
+    if (count_inverted() > 0 || sj_min() < min0) {
+      if (count_inverted() == 0) maxmin();
+      // still below: put back the vertices of the hexes below the old minimum and one ring around them,
+      // adding to the set put back until none is below (a hex half put back can fall in its turn); all of
+      // them if that does not do
+      std::vector<char> back(size_t(V_.rows()), 0);
+      for (int round = 0; round < kRevertRounds && (count_inverted() > 0 || sj_min() < min0); ++round) {
+        const auto now = all_quality();
+        std::vector<char> seed(size_t(V_.rows()), 0);
+        for (size_t h = 0; h < now.size(); ++h)
+          if (now[h].corner_min <= 0 || now[h].sj < min0)
+            for (int k = 0; k < 8; ++k) seed[size_t(H_(Eigen::Index(h), k))] = 1;
+        for (size_t v = 0; v < seed.size(); ++v)
+          if (seed[v])
+            for (int i = start_[v]; i < start_[v + 1]; ++i)
+              for (int k = 0; k < 8; ++k) back[size_t(H_(inc_[size_t(i)], k))] = 1;
+        for (size_t v = 0; v < back.size(); ++v)
+          if (back[v]) V_.row(Eigen::Index(v)) = keep.row(Eigen::Index(v));
+      }
+      if (count_inverted() > 0 || sj_min() < min0) {
+        V_ = keep;
+        return;
+      }
+    }
+    double sum = 0;
+    for (const HexSJ& x : all_quality()) sum += x.sj;
+    if (sum <= sum0) {
+      V_ = keep;
+      return;
+    }
+    st_.average_kept = 1;
+    st_.average_gain = (sum - sum0) / double(H_.rows());
+  }
+
   // (c) global shape improvement: coordinate descent of the Winslow energy of the whole mesh, then of
   // the sum of the scaled Jacobians (the average the quality report measures); a move never lowers the
   // local minimum nor the local sum of the scaled Jacobians
   void shape() {
-    PhaseTimer timer{st_.shape_seconds};
+    PhaseTimer timer{st_.shape_seconds};  // the average ascent included
+    average_global();
     double last_avg = -2;
     for (int it = 0; it < p_.shape_iterations && !out_of_time(); ++it) {
       // vertices of hexes below shape_target_sj (a regular grid interior needs no work)

@@ -33,6 +33,17 @@
 ///      rounds and at most until half the time budget is spent, so that (c) always runs (a
 ///      patch of poor hexes, where neither one vertex nor one hex can move alone); boundary vertices stay (the
 ///      energy would slide them across the surface's creases: L-block volume ratio 0.984 -> 0.972);
+///  (c0) global average ascent: the interior vertices of the hexes below `average_below_sj`, grown by
+///      `average_rings`, move together by L-BFGS on the sum over their hexes of minus the soft minimum of
+///      the hex's 9 scaled Jacobians, with a steep penalty below the region's lowest soft value and a small
+///      Winslow barrier against inversion (untangle_global.h raise_average). The Gauss-Seidel sweeps of (c)
+///      converge slowly where a whole region must drift (hand: 34 sweeps stop at average 0.926, 200 reach
+///      0.932). At most `average_iterations`, and at most `average_work` / the hexes of the region (the cost
+///      stays bounded on big meshes); it stops earlier when 25 iterations gain less than
+///      `average_tolerance` per hex. If the minimum fell, (b) runs again, then the vertices of the hexes
+///      still below the old minimum and one ring around them go back to their positions, the set growing
+///      until none is below (up to 10 rounds); kept only if no hex inverts, the minimum does not fall and
+///      the average rises;
 ///  (c) shape improvement, alternating sweeps: every vertex descends the same Winslow energy (ε -> 0) —
 ///      coordinate descent of one global energy — or ascends the sum of its hexes' scaled Jacobians (the
 ///      average the report measures), until a pair of sweeps raises the average by less than
@@ -57,6 +68,12 @@ struct OptimizeParams {
   int element_iterations = 5;       ///< rounds of whole-hex moves (each followed by max-min sweeps), [0, 1000]
   int smooth_iterations = 5;        ///< rounds of region smoothing around the worst hexes (kept while the minimum rises), [0, 1000]
   int shape_iterations = 30;       ///< max global shape-improvement sweeps, [0, 10000]
+  int average_iterations = 300;    ///< L-BFGS iterations of the global average ascent before the shape sweeps, 0 = off, [0, 100000]
+  double average_work = 4e6;       ///< the ascent's iterations are also capped at this / the hexes of its region (bounded cost on big meshes), [0, 1e12]
+  double average_barrier = 0.01;   ///< weight of the Winslow barrier in the ascent's energy (0: none; the result is checked either way), [0, 1]
+  double average_below_sj = 0.9;   ///< the ascent moves the interior vertices of hexes below this scaled Jacobian, [0, 1]
+  int average_rings = 1;           ///< ... grown by this many rings of hexes, [0, 50]
+  double average_tolerance = 1e-3; ///< the ascent stops when 25 iterations lower its energy by less per hex of its region, [0, 1]
   double shape_tolerance = 3e-4;   ///< the shape sweeps stop when a pair of them raises the average SJ by less, [0, 1]
   double target_sj = 0.8;          ///< max-min sweeps touch vertices with an incident hex below this SJ, [0, 1]
   double shape_target_sj = 0.99;   ///< shape sweeps touch vertices with an incident hex below this SJ, [0, 1]
@@ -71,6 +88,8 @@ struct OptimizeStats {
   double sj_min_after = 0, sj_avg_after = 0;
   long inverted_before = 0, inverted_after = 0;   ///< hexes with corner scaled Jacobian <= 0
   int untangle_sweeps = 0, maxmin_sweeps = 0, shape_sweeps = 0;
+  int average_kept = 0;                ///< 1 when the global average ascent was kept
+  double average_gain = 0;             ///< the average scaled Jacobian it added (with its max-min repair)
   int element_sweeps = 0;              ///< rounds of whole-hex moves
   long element_moves = 0;              ///< accepted whole-hex moves
   int smooth_rounds = 0, smooth_kept = 0;  ///< region smoothing rounds tried / kept

@@ -23,6 +23,17 @@ const bool registered = register_node(make_node<P>(
              "rounds of whole-hex moves towards the best-fitting cube, each followed by max-min sweeps", 0, 1000)
         .add("smooth_iterations", &P::smooth_iterations,
              "rounds of region smoothing around the worst hexes, kept while the minimum scaled Jacobian rises", 0, 1000)
+        .add("average_iterations", &P::average_iterations,
+             "L-BFGS iterations of the global average scaled Jacobian ascent before the shape sweeps (0 = off)", 0, 100000)
+        .add("average_work", &P::average_work,
+             "the average ascent's iterations are also capped at this divided by the hexes of its region", 0.0, 1e12)
+        .add("average_barrier", &P::average_barrier,
+             "weight of the Winslow barrier against inversion in the average ascent's energy (0 = none)", 0.0, 1.0)
+        .add("average_below_sj", &P::average_below_sj,
+             "the average ascent moves the interior vertices of hexes below this scaled Jacobian", 0.0, 1.0)
+        .add("average_rings", &P::average_rings, "the average ascent's region grows by this many rings of hexes", 0, 50)
+        .add("average_tolerance", &P::average_tolerance,
+             "the average ascent stops when 25 iterations lower its energy by less per hex of its region", 0.0, 1.0)
         .add("shape_iterations", &P::shape_iterations, "max global shape-improvement sweeps", 0, 10000)
         .add("shape_tolerance", &P::shape_tolerance,
              "the shape sweeps stop when a pair of them raises the average scaled Jacobian by less", 0.0, 1.0)
@@ -68,6 +79,8 @@ const bool registered = register_node(make_node<P>(
       j["untangle_sweeps"] = s.untangle_sweeps;
       j["maxmin_sweeps"] = s.maxmin_sweeps;
       j["shape_sweeps"] = s.shape_sweeps;
+      j["average_kept"] = s.average_kept;
+      j["average_gain"] = s.average_gain;
       j["element_sweeps"] = s.element_sweeps;
       j["element_moves"] = s.element_moves;
       j["smooth_rounds"] = s.smooth_rounds;
@@ -89,7 +102,7 @@ const bool registered = register_node(make_node<P>(
                  std::to_string(s.inverted_before) + " before)");
       if (s.time_budget_hit) ctx.warn("optimization stopped at its time budget of " + std::to_string(p.time_budget) + " s");
       return make_artefact(std::move(out));
-    }).with_version("11"));
+    }).with_version("12"));
 
 }  // namespace
 }  // namespace polyhex

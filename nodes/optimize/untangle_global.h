@@ -66,6 +66,24 @@ void smooth_region(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<cha
                    const std::vector<char>& fixed, const TriangleTree& tree, const std::vector<Eigen::Vector3d>& normals,
                    const std::vector<char>& seeds, const GlobalUntangleParams& p, GlobalUntangleStats* stats = nullptr);
 
+/// Raises the average scaled Jacobian around `seeds` (#H flags): the seeds' vertices grown by p.rings rings
+/// move together by L-BFGS (at most p.polish_iterations iterations; it stops when 25 of them lower the energy
+/// by less than `tolerance` per hex of the region) on Σ_h -soft_sj(h) + barrier · Σ_h E_h, soft_sj
+/// the soft minimum of the hex's 9 scaled Jacobians (hex_soft_scaled_jacobian), E_h the Winslow energy at
+/// ε -> 0, a barrier against inversion (a hex must pass a zero determinant to invert); surface vertices in
+/// their tangent planes, projected back. The minimum scaled Jacobian may fall: the caller checks.
+/// \return false (V unchanged) when the region is empty or has an inverted hex
+/// \pre as untangle_global(); seeds.size() == H.rows(); barrier >= 0; tolerance >= 0
+bool raise_average(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,
+                   const std::vector<char>& fixed, const TriangleTree& tree, const std::vector<Eigen::Vector3d>& normals,
+                   const std::vector<char>& seeds, double barrier, double tolerance, const GlobalUntangleParams& p,
+                   GlobalUntangleStats* stats = nullptr);
+
+/// Soft minimum of the 9 scaled Jacobians (8 corners, centre) of one hex, s_min - log(Σ exp(-40 (s_t - s_min))) / 40,
+/// within log(9) / 40 below the hex's scaled Jacobian, and, if grad, its gradient (8 by 3, row k = corner k).
+/// \param p  8 corners, VTK_HEXAHEDRON order
+double hex_soft_scaled_jacobian(const std::array<Eigen::Vector3d, 8>& p, Eigen::Matrix<double, 8, 3>* grad = nullptr);
+
 /// The energy of one hex: Σ over its 9 Jacobians (8 corners, centre) of |J|_F² / (3 χ(det J, ε)^{2/3}),
 /// J over `scale`; 9 for a cube of edge `scale` as ε -> 0.
 /// \param p     8 corners, VTK_HEXAHEDRON order

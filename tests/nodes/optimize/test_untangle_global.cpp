@@ -156,3 +156,90 @@ TEST_CASE("smooth_region evens out a squeezed patch, keeps the surface and needs
   CHECK(st2.lbfgs_iterations == 0);
   CHECK(W == bad.V);
 }
+
+TEST_CASE("soft scaled Jacobian: 1 - log(9)/40 on a cube, at most log(9)/40 under the true one, exact gradient",
+          "[quality-opt]") {
+  HexMesh g = test::grid_hex_mesh(1, 1, 1, 2.0);
+  auto p = hex_corners(g, 0);
+  Eigen::Matrix<double, 8, 3> G;
+  const double slack = std::log(9.0) / 40.0;
+  CHECK(hex_soft_scaled_jacobian(p, &G) == Approx(1.0 - slack).epsilon(1e-12));
+  CHECK(G.norm() < 1e-12);  // every scaled Jacobian is at its maximum
+  // sheared and squeezed: one corner far below the others
+  p[6] += Eigen::Vector3d(0.7, -0.4, -0.9);
+  p[1] += Eigen::Vector3d(0.2, 0.3, 0.1);
+  const double sj = hex_scaled_jacobian(p).sj;
+  REQUIRE(sj > 0.1);
+  REQUIRE(sj < 0.9);
+  const double soft = hex_soft_scaled_jacobian(p, &G);
+  CHECK(soft <= sj + 1e-12);
+  CHECK(soft >= sj - slack - 1e-12);
+  for (int k = 0; k < 8; ++k)
+    for (int a = 0; a < 3; ++a) {
+      auto q = p;
+      const double d = 1e-6;
+      q[size_t(k)][a] += d;
+      const double sp = hex_soft_scaled_jacobian(q);
+      q[size_t(k)][a] -= 2 * d;
+      const double sm = hex_soft_scaled_jacobian(q);
+      CHECK(G(k, a) == Approx((sp - sm) / (2 * d)).margin(1e-6));
+    }
+}
+
+TEST_CASE("raise_average lifts the average of a swirled grid, keeps fixed vertices, inverts nothing; declines a fold",
+          "[quality-opt]") {
+  // a 6x6x6 grid whose interior is swirled about the z axis (a smooth, low-frequency distortion that
+  // one-vertex sweeps undo slowly); its boundary is fixed
+  const int n = 6;
+  HexMesh g = test::grid_hex_mesh(n, n, n);
+  SurfaceMesh s = test::voxel_surface(test::voxel_box(n, n, n));
+  TriangleTree tree(s.V, s.F);
+  std::vector<Eigen::Vector3d> normals(size_t(s.F.rows()), Eigen::Vector3d::UnitZ());
+  std::vector<char> on_surface(size_t(g.V.rows()), 0), fixed(size_t(g.V.rows()), 0);
+  for (Eigen::Index v = 0; v < g.V.rows(); ++v) {
+    const Eigen::RowVector3d x = g.V.row(v);
+    if ((x.array() < 1e-12).any() || (x.array() > n - 1e-12).any()) {
+      fixed[size_t(v)] = 1;
+      continue;
+    }
+    const double cx = x[0] - n / 2.0, cy = x[1] - n / 2.0;
+    const double t = 0.25 * std::sin(M_PI * x[2] / n);  // radians, largest mid-height
+    g.V(v, 0) = n / 2.0 + std::cos(t) * cx - std::sin(t) * cy;
+    g.V(v, 1) = n / 2.0 + std::sin(t) * cx + std::cos(t) * cy;
+  }
+  const HexQuality q0 = hex_quality(g, nullptr);
+  REQUIRE(q0.inverted == 0);
+  REQUIRE(q0.sj_avg < 0.95);
+  std::vector<char> seeds(size_t(g.H.rows()), 1);
+  RowMatrixX3d V = g.V;
+  GlobalUntangleParams p;
+  p.rings = 0;
+  p.polish_iterations = 300;
+  GlobalUntangleStats st;
+  REQUIRE(raise_average(V, g.H, on_surface, fixed, tree, normals, seeds, 0.01, 0.0, p, &st));
+  HexMesh m = g;
+  m.V = V;
+  const HexQuality q1 = hex_quality(m, nullptr);
+  CHECK(st.lbfgs_iterations > 0);
+  CHECK(q1.inverted == 0);
+  CHECK(q1.sj_avg > q0.sj_avg + 0.02);
+  CHECK(q1.sj_min > q0.sj_min - std::log(9.0) / 40.0);  // the floor holds the soft minimum
+  for (Eigen::Index v = 0; v < V.rows(); ++v)
+    if (fixed[size_t(v)]) CHECK(V.row(v) == g.V.row(v));
+  // a tolerance no 25 iterations can meet stops it at the first check
+  RowMatrixX3d W = g.V;
+  GlobalUntangleStats st1;
+  REQUIRE(raise_average(W, g.H, on_surface, fixed, tree, normals, seeds, 0.01, 1e6, p, &st1));
+  CHECK(st1.lbfgs_iterations == 25);
+  // an inverted hex in the region: nothing moves
+  RowMatrixX3d F = g.V;
+  const Eigen::Index c = 3 * 49 + 3 * 7 + 3;  // the vertex at (3, 3, 3) of the 7x7x7 vertex grid
+  REQUIRE((g.V.row(c) - Eigen::RowVector3d(3, 3, 3)).norm() < 1e-9);
+  F(c, 0) += 1.6;
+  HexMesh folded = g;
+  folded.V = F;
+  REQUIRE(hex_quality(folded, nullptr).inverted > 0);
+  GlobalUntangleStats st2;
+  CHECK_FALSE(raise_average(F, g.H, on_surface, fixed, tree, normals, seeds, 0.01, 0.0, p, &st2));
+  CHECK(F == folded.V);
+}
