@@ -642,41 +642,30 @@ class Optimizer {
     }
     GlobalUntangleParams gp = descent_setup(true, surf, fixed);
     gp.rings = p_.average_rings;
-    // the work cap: iterations x hexes of the region (those with a free vertex of the seeds grown by the rings)
-    const std::vector<char> grown = cell_ring_region(H_, V_.rows(), p_.average_rings, [&](Eigen::Index h) { return seeds[size_t(h)] != 0; });
-    std::vector<char> moves(size_t(V_.rows()), 0);
-    for (size_t v = 0; v < moves.size(); ++v) moves[v] = grown[v] && !fixed[v];
-    double region = 0;
-    for (Eigen::Index h = 0; h < H_.rows(); ++h) {
-      bool any = false;
-      for (int k = 0; k < 8 && !any; ++k) any = moves[size_t(H_(h, k))];
-      region += any;
-    }
-    if (region == 0) return;
-    gp.polish_iterations = int(std::min(double(p_.average_iterations), p_.average_work / region));
-    if (gp.polish_iterations < 1) return;
+    gp.polish_iterations = p_.average_iterations;
+    const AverageAscentParams a{p_.average_barrier, p_.average_tolerance, p_.average_work};
     const RowMatrixX3d keep = V_;
-    if (!raise_average(V_, H_, surf, fixed, tree_, normals_, seeds, p_.average_barrier, p_.average_tolerance, gp)) return;
-    if (count_inverted() > 0 || sj_min() < min0) {
+    if (!raise_average(V_, H_, surf, fixed, tree_, normals_, seeds, a, gp)) return;
+    // true when a hex is inverted or below the old minimum, with their flags in `below`
+    std::vector<char> below(size_t(H_.rows()), 0);
+    auto fell = [&] {
+      const auto now = all_quality();
+      bool any = false;
+      for (size_t h = 0; h < now.size(); ++h) any |= (below[h] = now[h].corner_min <= 0 || now[h].sj < min0);
+      return any;
+    };
+    if (fell()) {
       if (count_inverted() == 0) maxmin();
       // still below: put back the vertices of the hexes below the old minimum and one ring around them,
       // adding to the set put back until none is below (a hex half put back can fall in its turn); all of
       // them if that does not do
       std::vector<char> back(size_t(V_.rows()), 0);
-      for (int round = 0; round < kRevertRounds && (count_inverted() > 0 || sj_min() < min0); ++round) {
-        const auto now = all_quality();
-        std::vector<char> seed(size_t(V_.rows()), 0);
-        for (size_t h = 0; h < now.size(); ++h)
-          if (now[h].corner_min <= 0 || now[h].sj < min0)
-            for (int k = 0; k < 8; ++k) seed[size_t(H_(Eigen::Index(h), k))] = 1;
-        for (size_t v = 0; v < seed.size(); ++v)
-          if (seed[v])
-            for (int i = start_[v]; i < start_[v + 1]; ++i)
-              for (int k = 0; k < 8; ++k) back[size_t(H_(inc_[size_t(i)], k))] = 1;
+      for (int round = 0; round < kRevertRounds && fell(); ++round) {
+        const auto ring = cell_ring_region(H_, V_.rows(), 1, [&](Eigen::Index h) { return below[size_t(h)] != 0; });
         for (size_t v = 0; v < back.size(); ++v)
-          if (back[v]) V_.row(Eigen::Index(v)) = keep.row(Eigen::Index(v));
+          if (back[v] |= ring[v]) V_.row(Eigen::Index(v)) = keep.row(Eigen::Index(v));
       }
-      if (count_inverted() > 0 || sj_min() < min0) {
+      if (fell()) {
         V_ = keep;
         return;
       }

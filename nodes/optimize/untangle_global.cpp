@@ -123,12 +123,14 @@ class GlobalUntangler {
         t0_(std::chrono::steady_clock::now()) {}
 
   /// Average scaled Jacobian ascent around the seed hexes (see raise_average()); returns false (nothing
-  /// moved) when the region is empty or has an inverted hex.
-  bool run_average(const std::vector<char>& seeds, double barrier, double tolerance) {
+  /// moved) when the region is empty, has an inverted hex or the work cap allows no iteration.
+  bool run_average(const std::vector<char>& seeds, const AverageAscentParams& a) {
     select(seeds, V_.rows(), H_.rows());
     if (free_.empty() || count_inverted() > 0) return false;
+    const int iterations = int(std::min(double(p_.polish_iterations), a.work / double(active_.size())));
+    if (iterations < 1) return false;
     average_ = true;
-    quality_barrier_ = barrier;
+    quality_barrier_ = a.barrier;
     // the floor: the lowest soft scaled Jacobian of the region now; a hex going below it pays a steep
     // quadratic penalty, so that the ascent does not trade the worst hexes for the average. The soft
     // minimum lies up to log(9) / β under the true one, so the worst hexes may still lose a little: the
@@ -143,7 +145,7 @@ class GlobalUntangler {
     }
     set_base();
     VecX x = VecX::Zero(ndof_);
-    lbfgs(x, 1e-10, false, p_.polish_iterations, tolerance);
+    lbfgs(x, 1e-10, false, iterations, a.tolerance);
     apply(x);
     project();
     return true;
@@ -421,11 +423,11 @@ long untangle_global(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<c
 
 bool raise_average(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,
                    const std::vector<char>& fixed, const TriangleTree& tree, const std::vector<Eigen::Vector3d>& normals,
-                   const std::vector<char>& seeds, double barrier, double tolerance, const GlobalUntangleParams& p,
+                   const std::vector<char>& seeds, const AverageAscentParams& a, const GlobalUntangleParams& p,
                    GlobalUntangleStats* stats) {
   GlobalUntangleStats st;
   GlobalUntangler u(V, H, on_surface, fixed, tree, normals, p, st);
-  const bool ran = u.run_average(seeds, barrier, tolerance);
+  const bool ran = u.run_average(seeds, a);
   if (stats) *stats = st;
   return ran;
 }

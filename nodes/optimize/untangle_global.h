@@ -66,17 +66,25 @@ void smooth_region(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<cha
                    const std::vector<char>& fixed, const TriangleTree& tree, const std::vector<Eigen::Vector3d>& normals,
                    const std::vector<char>& seeds, const GlobalUntangleParams& p, GlobalUntangleStats* stats = nullptr);
 
+/// The ascent's own settings (raise_average).
+struct AverageAscentParams {
+  double barrier = 0.01;   ///< weight of the Winslow barrier, >= 0
+  double tolerance = 0;    ///< stop when 25 iterations lower the energy by less than this per hex of the region, >= 0
+  double work = 1e12;      ///< iterations are also capped at work / the hexes of the region, > 0
+};
+
 /// Raises the average scaled Jacobian around `seeds` (#H flags): the seeds' vertices grown by p.rings rings
-/// move together by L-BFGS (at most p.polish_iterations iterations; it stops when 25 of them lower the energy
-/// by less than `tolerance` per hex of the region) on Σ_h -soft_sj(h) + barrier · Σ_h E_h, soft_sj
-/// the soft minimum of the hex's 9 scaled Jacobians (hex_soft_scaled_jacobian), E_h the Winslow energy at
-/// ε -> 0, a barrier against inversion (a hex must pass a zero determinant to invert); surface vertices in
-/// their tangent planes, projected back. The minimum scaled Jacobian may fall: the caller checks.
-/// \return false (V unchanged) when the region is empty or has an inverted hex
-/// \pre as untangle_global(); seeds.size() == H.rows(); barrier >= 0; tolerance >= 0
+/// move together by L-BFGS (at most p.polish_iterations iterations and at most a.work / the hexes of the
+/// region; it stops when 25 of them lower the energy by less than a.tolerance per hex of the region) on
+/// Σ_h -soft_sj(h) + a.barrier · Σ_h E_h, soft_sj the soft minimum of the hex's 9 scaled Jacobians
+/// (hex_soft_scaled_jacobian), E_h the Winslow energy at ε -> 0, a barrier against inversion (a hex must
+/// pass a zero determinant to invert); surface vertices in their tangent planes, projected back. The
+/// minimum scaled Jacobian may fall: the caller checks.
+/// \return false (V unchanged) when the region is empty, has an inverted hex or the work cap allows no iteration
+/// \pre as untangle_global(); seeds.size() == H.rows(); a's fields in their ranges
 bool raise_average(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,
                    const std::vector<char>& fixed, const TriangleTree& tree, const std::vector<Eigen::Vector3d>& normals,
-                   const std::vector<char>& seeds, double barrier, double tolerance, const GlobalUntangleParams& p,
+                   const std::vector<char>& seeds, const AverageAscentParams& a, const GlobalUntangleParams& p,
                    GlobalUntangleStats* stats = nullptr);
 
 /// Soft minimum of the 9 scaled Jacobians (8 corners, centre) of one hex, s_min - log(Σ exp(-40 (s_t - s_min))) / 40,

@@ -216,7 +216,7 @@ TEST_CASE("raise_average lifts the average of a swirled grid, keeps fixed vertic
   p.rings = 0;
   p.polish_iterations = 300;
   GlobalUntangleStats st;
-  REQUIRE(raise_average(V, g.H, on_surface, fixed, tree, normals, seeds, 0.01, 0.0, p, &st));
+  REQUIRE(raise_average(V, g.H, on_surface, fixed, tree, normals, seeds, {0.01, 0.0}, p, &st));
   HexMesh m = g;
   m.V = V;
   const HexQuality q1 = hex_quality(m, nullptr);
@@ -229,7 +229,7 @@ TEST_CASE("raise_average lifts the average of a swirled grid, keeps fixed vertic
   // a tolerance no 25 iterations can meet stops it at the first check
   RowMatrixX3d W = g.V;
   GlobalUntangleStats st1;
-  REQUIRE(raise_average(W, g.H, on_surface, fixed, tree, normals, seeds, 0.01, 1e6, p, &st1));
+  REQUIRE(raise_average(W, g.H, on_surface, fixed, tree, normals, seeds, {0.01, 1e6}, p, &st1));
   CHECK(st1.lbfgs_iterations == 25);
   // an inverted hex in the region: nothing moves
   RowMatrixX3d F = g.V;
@@ -240,6 +240,6 @@ TEST_CASE("raise_average lifts the average of a swirled grid, keeps fixed vertic
   folded.V = F;
   REQUIRE(hex_quality(folded, nullptr).inverted > 0);
   GlobalUntangleStats st2;
-  CHECK_FALSE(raise_average(F, g.H, on_surface, fixed, tree, normals, seeds, 0.01, 0.0, p, &st2));
+  CHECK_FALSE(raise_average(F, g.H, on_surface, fixed, tree, normals, seeds, {0.01, 0.0}, p, &st2));
   CHECK(F == folded.V);
 }
