@@ -750,7 +750,7 @@ double hex_winslow_energy(const std::array<Eigen::Vector3d, 8>& p, double scale,
     J.col(0) = (p[size_t(c[1])] - p[size_t(c[0])]) / scale;
     J.col(1) = (p[size_t(c[2])] - p[size_t(c[0])]) / scale;
     J.col(2) = (p[size_t(c[3])] - p[size_t(c[0])]) / scale;
-    e += winslow_term(J, eps, nullptr);
+    e += winslow_term(J, eps, nullptr, optimize_detail::CubeRoot::fast);
   }
   return e;
 }

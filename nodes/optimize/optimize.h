@@ -39,8 +39,8 @@
 ///      Winslow barrier against inversion (untangle_global.h raise_average). The Gauss-Seidel sweeps of (c)
 ///      converge slowly where a whole region must drift (hand: 34 sweeps stop at average 0.926, 200 reach
 ///      0.932). At most `average_iterations`, and at most `average_work` / the hexes of the region (the cost
-///      stays bounded on big meshes); it stops earlier when 25 iterations gain less than
-///      `average_tolerance` per hex. If the minimum fell, (b) runs again, then the vertices of the hexes
+///      stays bounded on big meshes); it stops earlier when 25 iterations raise the region's scaled
+///      Jacobians by less than `average_tolerance` per hex. If the minimum fell, (b) runs again, then the vertices of the hexes
 ///      still below the old minimum and one ring around them go back to their positions, the set growing
 ///      until none is below (up to 10 rounds); kept only if no hex inverts, the minimum does not fall and
 ///      the average rises;
@@ -73,7 +73,7 @@ struct OptimizeParams {
   double average_barrier = 0.01;   ///< weight of the Winslow barrier in the ascent's energy (0: none; the result is checked either way), [0, 1]
   double average_below_sj = 0.9;   ///< the ascent moves the interior vertices of hexes below this scaled Jacobian, [0, 1]
   int average_rings = 1;           ///< ... grown by this many rings of hexes, [0, 50]
-  double average_tolerance = 1e-3; ///< the ascent stops when 25 iterations lower its energy by less per hex of its region, [0, 1]
+  double average_tolerance = 1e-3; ///< the ascent stops when 25 iterations raise the scaled Jacobian of its region by less per hex, [0, 1]
   double shape_tolerance = 3e-4;   ///< the shape sweeps stop when a pair of them raises the average SJ by less, [0, 1]
   double target_sj = 0.8;          ///< max-min sweeps touch vertices with an incident hex below this SJ, [0, 1]
   double shape_target_sj = 0.99;   ///< shape sweeps touch vertices with an incident hex below this SJ, [0, 1]

@@ -102,7 +102,7 @@ const bool registered = register_node(make_node<P>(
                  std::to_string(s.inverted_before) + " before)");
       if (s.time_budget_hit) ctx.warn("optimization stopped at its time budget of " + std::to_string(p.time_budget) + " s");
       return make_artefact(std::move(out));
-    }).with_version("12"));
+    }).with_version("13"));
 
 }  // namespace
 }  // namespace polyhex

@@ -72,7 +72,7 @@ double hex_energy(const Mat83& P, double eps, Mat83* G) {
   if (G) G->setZero();
   Eigen::Matrix3d dJ;
   for (size_t t = 0; t < 9; ++t) {
-    e += winslow_term(jacobian(P, t), eps, G ? &dJ : nullptr);
+    e += winslow_term(jacobian(P, t), eps, G ? &dJ : nullptr, optimize_detail::CubeRoot::fast);
     if (G) scatter(*G, t, dJ);
   }
   return e;
@@ -287,6 +287,19 @@ class GlobalUntangler {
     });
   }
 
+  /// Sum of the scaled Jacobians (Verdict, quality.h) of the active hexes at V_.
+  double active_sj_sum() const {
+    std::vector<double> v(active_.size());
+    tbb::parallel_for(size_t(0), active_.size(), [&](size_t a) {
+      std::array<Vec3, 8> p;
+      for (int k = 0; k < 8; ++k) p[size_t(k)] = V_.row(H_(active_[a], k)).transpose();
+      v[a] = hex_scaled_jacobian(p).sj;
+    });
+    double s = 0;
+    for (double x : v) s += x;
+    return s;
+  }
+
   /// Minimum normalised determinant over the 9 Jacobians of the active hexes.
   double min_det() const {
     std::vector<double> m(active_.size(), std::numeric_limits<double>::infinity());
@@ -358,11 +371,16 @@ class GlobalUntangler {
     o.iterations = iterations;
     o.gradient_tol = 1e-10 / mean_scale;
     o.first_move = 0.1 * mean_scale;
-    double e_last = progress >= 0 ? energy(x, eps, nullptr) : 0.0;
+    auto measure = [&](const VecX& y) {
+      if (!average_) return energy(y, eps, nullptr);
+      apply(y);
+      return -active_sj_sum();
+    };
+    double e_last = progress >= 0 ? measure(x) : 0.0;
     auto stop = [&](int done, const VecX& y, bool after_step) {
       if (!after_step) return out_of_time();
       if (progress >= 0 && done % kProgressCheck == 0) {
-        const double e = energy(y, eps, nullptr);
+        const double e = measure(y);
         const bool slow = e_last - e < progress * double(active_.size());
         e_last = e;
         if (slow) return true;

@@ -69,13 +69,15 @@ void smooth_region(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<cha
 /// The ascent's own settings (raise_average).
 struct AverageAscentParams {
   double barrier = 0.01;   ///< weight of the Winslow barrier, >= 0
-  double tolerance = 0;    ///< stop when 25 iterations lower the energy by less than this per hex of the region, >= 0
+  double tolerance = 0;    ///< stop when 25 iterations raise the scaled Jacobian by less than this per hex of the region, >= 0
   double work = 1e12;      ///< iterations are also capped at work / the hexes of the region, > 0
 };
 
 /// Raises the average scaled Jacobian around `seeds` (#H flags): the seeds' vertices grown by p.rings rings
 /// move together by L-BFGS (at most p.polish_iterations iterations and at most a.work / the hexes of the
-/// region; it stops when 25 of them lower the energy by less than a.tolerance per hex of the region) on
+/// region; it stops when 25 of them raise the sum of the region's scaled Jacobians, the measure the report
+/// gives, by less than a.tolerance per hex: the energy below also pays for evening out a hex's 9 Jacobians
+/// above its minimum, which the report does not see) on
 /// Σ_h -soft_sj(h) + a.barrier · Σ_h E_h, soft_sj the soft minimum of the hex's 9 scaled Jacobians
 /// (hex_soft_scaled_jacobian), E_h the Winslow energy at ε -> 0, a barrier against inversion (a hex must
 /// pass a zero determinant to invert); surface vertices in their tangent planes, projected back. The
