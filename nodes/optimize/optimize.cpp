@@ -1,6 +1,7 @@
 // Hex mesh optimization (paper §6): untangle, max-min scaled Jacobian, shape improvement. See optimize.h.
 #include "nodes/optimize/optimize.h"
 #include "nodes/optimize/hex_corners.h"
+#include "nodes/optimize/features.h"
 #include "nodes/artefacts/cell_rings.h"
 #include "nodes/artefacts/hex_topology.h"
 #include "nodes/optimize/untangle_global.h"
@@ -12,6 +13,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <deque>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -71,6 +73,22 @@ class Optimizer {
       for (int k = 0; k < 4; ++k) boundary_[size_t(Q(q, k))] = 1;
     for (Eigen::Index v = 0; v < V_.rows(); ++v)
       if (boundary_[size_t(v)]) V_.row(v) = tree_.closest(V_.row(v).transpose()).point.transpose();
+    released_.assign(size_t(V_.rows()), 0);
+    if (p_.feature_angle > 0 && p_.move_boundary && Q.rows() > 0) {
+      // the hex edge length: median boundary edge
+      std::vector<double> len;
+      len.reserve(size_t(Q.rows()));
+      for (Eigen::Index q = 0; q < Q.rows(); ++q) len.push_back((V_.row(Q(q, 0)) - V_.row(Q(q, 1))).norm());
+      std::nth_element(len.begin(), len.begin() + long(len.size() / 2), len.end());
+      const double h = len[len.size() / 2];
+      creases_ = find_creases(surface, p_.feature_angle, 1.5 * h);
+      snap_ = snap_to_creases(V_, Q, creases_, h);
+      st_.crease_lines = int(creases_.lines.size());
+      st_.crease_lines_snapped = snap_.lines_snapped;
+      st_.crease_vertices = snap_.vertices;
+      for (Eigen::Index v = 0; v < V_.rows(); ++v)
+        if (on_crease(int(v))) V_.row(v) = project(int(v), V_.row(v).transpose()).transpose();
+    }
   }
 
   HexMesh run(const std::string& source) {
@@ -291,7 +309,18 @@ class Optimizer {
 
   /// A boundary vertex kept on the input surface (not released by the last-resort untangling).
   bool on_surface(int v) const { return boundary_[size_t(v)] && !released_[size_t(v)]; }
-  Vec3 project(int v, const Vec3& x) const { return on_surface(v) ? tree_.closest(x).point : x; }
+  /// A boundary vertex kept on a crease line or at a crease corner (features.h), not released.
+  bool on_crease(int v) const {
+    return !snap_.line.empty() && (snap_.line[size_t(v)] >= 0 || snap_.corner[size_t(v)] >= 0) && on_surface(v);
+  }
+  Vec3 project(int v, const Vec3& x) const {
+    if (!on_surface(v)) return x;
+    if (on_crease(v)) {
+      if (snap_.corner[size_t(v)] >= 0) return creases_.corners[size_t(snap_.corner[size_t(v)])];
+      return closest_on_line(creases_.lines[size_t(snap_.line[size_t(v)])], x);
+    }
+    return tree_.closest(x).point;
+  }
 
   /// Moves vertex v to decrease f; `ok()` judges the trial position (V_ holds it). Returns true if moved.
   template <class F, class Ok>
@@ -310,7 +339,11 @@ class Optimizer {
       g[a] = (fp - fm) / (2 * d);
     }
     Vec3 normal = Vec3::Zero();
-    if (on_surface(v)) {
+    if (on_crease(v)) {  // along the crease line only
+      Vec3 t = Vec3::Zero();
+      if (snap_.line[size_t(v)] >= 0) closest_on_line(creases_.lines[size_t(snap_.line[size_t(v)])], x0, &t);
+      g = g.dot(t) * t;
+    } else if (on_surface(v)) {
       const auto hit = tree_.closest(x0);
       normal = normals_[size_t(hit.triangle)];
       g -= g.dot(normal) * normal;
@@ -340,7 +373,10 @@ class Optimizer {
 
   double elapsed() const { return std::chrono::duration<double>(Clock::now() - t0_).count(); }
 
-  bool movable(int v) const { return p_.move_boundary || !boundary_[size_t(v)]; }
+  bool movable(int v) const {
+    if (!snap_.corner.empty() && snap_.corner[size_t(v)] >= 0 && on_surface(v)) return false;  // at a crease corner
+    return p_.move_boundary || !boundary_[size_t(v)];
+  }
 
   /// The inputs shared by the global descents (untangle_global.h): which vertices stay on the surface and
   /// which do not move (`keep_boundary`: no boundary vertex moves), the rings and the time left.
@@ -349,7 +385,8 @@ class Optimizer {
     fixed.assign(size_t(V_.rows()), 0);
     for (size_t v = 0; v < size_t(V_.rows()); ++v) {
       surf[v] = on_surface(int(v));
-      fixed[v] = !movable(int(v)) || (keep_boundary && boundary_[v]);
+      // crease vertices stay in the global descents, which move boundary vertices in tangent planes
+      fixed[v] = !movable(int(v)) || (keep_boundary && boundary_[v]) || on_crease(int(v));
     }
     GlobalUntangleParams gp;
     gp.rings = p_.global_rings;
@@ -730,6 +767,8 @@ class Optimizer {
   std::vector<std::vector<int>> classes_;
   std::vector<char> boundary_;
   std::vector<char> released_;  ///< boundary vertices allowed off the surface (last-resort untangling)
+  SurfaceCreases creases_;      ///< the surface's sharp creases (feature_angle > 0)
+  CreaseSnap snap_;             ///< boundary vertices on them (empty vectors when off)
   std::vector<Vec3> normals_;
 };
 
@@ -766,48 +805,64 @@ bool better_result(const OptimizeStats& a, const OptimizeStats& b) {
 
 HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback, const SurfaceMesh& surface,
                                    const OptimizeParams& p, OptimizeStats* stats, FallbackOutcome* outcome) {
-  // Both candidates go through (a)-(b''); the shape improvement (c), which never lowers the minimum nor
-  // un-inverts, runs on the better one only.
+  // Every candidate goes through (a)-(b''); the shape improvement (c), which never lowers the minimum nor
+  // un-inverts, runs on the best one only. The first is the mesh with its boundary on the surface; if its
+  // result is poor, the same mesh with crease lines (feature_angle), then the fallback mesh.
   const auto t0 = Clock::now();
   check_hex_mesh(mesh);
-  OptimizeStats a, b;
-  summarise(mesh, a.sj_min_before, a.sj_avg_before, a.inverted_before);
-  Optimizer first(mesh, surface, p, a);
-  first.improve();
-  const long inverted_a = first.inverted_now();
-  const double min_a = first.min_now();
-  bool used = false;
-  std::unique_ptr<Optimizer> second;
-  double second_seconds = 0;  // the fallback's own time (its shape pass included if kept)
-  if (fallback && (inverted_a > 0 || min_a < p.fallback_below_sj)) {
-    const auto tb = Clock::now();
-    check_hex_mesh(*fallback);
-    summarise(*fallback, b.sj_min_before, b.sj_avg_before, b.inverted_before);
-    second = std::make_unique<Optimizer>(*fallback, surface, p, b);
-    second->improve();
-    second_seconds = std::chrono::duration<double>(Clock::now() - tb).count();
-    b.inverted_after = second->inverted_now();
-    b.sj_min_after = second->min_now();
-    OptimizeStats at_a;
-    at_a.inverted_after = inverted_a;
-    at_a.sj_min_after = min_a;
-    used = better_result(b, at_a);
+  struct Candidate {
+    const HexMesh* mesh;
+    OptimizeStats st;  // the Optimizer keeps a reference: candidates live in a deque
+    std::unique_ptr<Optimizer> opt;
+    double seconds = 0;  // its own time (its shape pass included if kept)
+  };
+  std::deque<Candidate> cands;
+  auto start = [&](const HexMesh& m, const OptimizeParams& q) -> Candidate& {
+    const auto tc = Clock::now();
+    check_hex_mesh(m);
+    Candidate& c = cands.emplace_back();
+    c.mesh = &m;
+    summarise(m, c.st.sj_min_before, c.st.sj_avg_before, c.st.inverted_before);
+    c.opt = std::make_unique<Optimizer>(m, surface, q, c.st);
+    c.seconds = std::chrono::duration<double>(Clock::now() - tc).count();
+    return c;
+  };
+  auto improve = [&](Candidate& c) {
+    const auto tc = Clock::now();
+    c.opt->improve();
+    c.st.inverted_after = c.opt->inverted_now();
+    c.st.sj_min_after = c.opt->min_now();
+    c.seconds += std::chrono::duration<double>(Clock::now() - tc).count();
+  };
+  OptimizeParams plain = p;
+  plain.feature_angle = 0;
+  improve(start(mesh, plain));
+  const bool poor = cands[0].st.inverted_after > 0 || cands[0].st.sj_min_after < p.fallback_below_sj;
+  Candidate* creases = nullptr;
+  Candidate* fb = nullptr;
+  if (poor && p.feature_angle > 0 && p.move_boundary) {
+    creases = &start(mesh, p);
+    if (creases->st.crease_lines_snapped > 0) improve(*creases);
+    else creases->opt.reset();  // no crease line to follow: the same as the first
   }
+  if (poor && fallback) improve(*(fb = &start(*fallback, plain)));
+  Candidate* best = &cands[0];
+  for (Candidate& c : cands)
+    if (c.opt && better_result(c.st, best->st)) best = &c;
   const auto tf = Clock::now();
-  HexMesh out = used ? second->finish(fallback->source) : first.finish(mesh.source);
-  OptimizeStats& kept = used ? b : a;
-  summarise(out, kept.sj_min_after, kept.sj_avg_after, kept.inverted_after);
-  if (used) second_seconds += std::chrono::duration<double>(Clock::now() - tf).count();
-  kept.seconds = std::chrono::duration<double>(Clock::now() - t0).count();  // the whole stage
-  if (stats) *stats = kept;
+  HexMesh out = best->opt->finish(best->mesh->source);
+  summarise(out, best->st.sj_min_after, best->st.sj_avg_after, best->st.inverted_after);
+  best->seconds += std::chrono::duration<double>(Clock::now() - tf).count();
+  best->st.seconds = std::chrono::duration<double>(Clock::now() - t0).count();  // the whole stage
+  if (stats) *stats = best->st;
   if (outcome) {
     *outcome = FallbackOutcome{};
-    outcome->ran = second != nullptr;
-    outcome->kept = used;
-    if (second) {
-      outcome->stats = b;
-      outcome->stats.seconds = second_seconds;
-    }
+    outcome->ran = fb != nullptr;
+    outcome->kept = fb != nullptr && best == fb;
+    if (fb) outcome->stats = fb->st, outcome->stats.seconds = fb->seconds;
+    outcome->creases_ran = creases != nullptr && creases->opt != nullptr;
+    outcome->creases_kept = creases != nullptr && best == creases;
+    if (outcome->creases_ran) outcome->creases_stats = creases->st, outcome->creases_stats.seconds = creases->seconds;
   }
   return out;
 }

@@ -33,7 +33,7 @@ const bool registered = register_node(make_node<P>(
              "the average ascent moves the interior vertices of hexes below this scaled Jacobian", 0.0, 1.0)
         .add("average_rings", &P::average_rings, "the average ascent's region grows by this many rings of hexes", 0, 50)
         .add("average_tolerance", &P::average_tolerance,
-             "the average ascent stops when 25 iterations lower its energy by less per hex of its region", 0.0, 1.0)
+             "the average ascent stops when 25 iterations raise its region's scaled Jacobians by less per hex", 0.0, 1.0)
         .add("shape_iterations", &P::shape_iterations, "max global shape-improvement sweeps", 0, 10000)
         .add("shape_tolerance", &P::shape_tolerance,
              "the shape sweeps stop when a pair of them raises the average scaled Jacobian by less", 0.0, 1.0)
@@ -44,6 +44,9 @@ const bool registered = register_node(make_node<P>(
         .add("move_boundary", &P::move_boundary, "boundary vertices may slide on the surface")
         .add("release_boundary", &P::release_boundary,
              "last resort: boundary corners of hexes still inverted after untangling may leave the surface")
+        .add("feature_angle", &P::feature_angle,
+             "when the first result is poor (see fallback_below_sj), the mesh is optimized again with boundary vertices on the "
+             "surface's creases sharper than this many degrees, and the better result kept (0 = off)", 0.0, 179.0)
         .add("fallback_below_sj", &P::fallback_below_sj,
              "with a fallback input: also optimize it when the first result's minimum scaled Jacobian is below this",
              0.0, 1.0),
@@ -63,6 +66,16 @@ const bool registered = register_node(make_node<P>(
         j["fallback_inverted"] = fb.stats.inverted_after;
         j["fallback_sj_min"] = fb.stats.sj_min_after;
         j["fallback_seconds"] = fb.stats.seconds;
+      }
+      j["creases_ran"] = fb.creases_ran;
+      j["creases_kept"] = fb.creases_kept;
+      if (fb.creases_ran) {
+        j["creases_inverted"] = fb.creases_stats.inverted_after;
+        j["creases_sj_min"] = fb.creases_stats.sj_min_after;
+        j["creases_seconds"] = fb.creases_stats.seconds;
+        j["crease_lines"] = fb.creases_stats.crease_lines;
+        j["crease_lines_snapped"] = fb.creases_stats.crease_lines_snapped;
+        j["crease_vertices"] = fb.creases_stats.crease_vertices;
       }
       j["sj_min_before"] = s.sj_min_before;
       j["sj_avg_before"] = s.sj_avg_before;
@@ -102,7 +115,7 @@ const bool registered = register_node(make_node<P>(
                  std::to_string(s.inverted_before) + " before)");
       if (s.time_budget_hit) ctx.warn("optimization stopped at its time budget of " + std::to_string(p.time_budget) + " s");
       return make_artefact(std::move(out));
-    }).with_version("13"));
+    }).with_version("14"));
 
 }  // namespace
 }  // namespace polyhex

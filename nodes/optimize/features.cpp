@@ -1,0 +1,291 @@
+#include "nodes/optimize/features.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <queue>
+#include <string>
+#include <unordered_map>
+
+#include "runtime/errors.h"
+
+namespace polyhex {
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+
+double line_length(const std::vector<Vec3>& line) {
+  double L = 0;
+  for (size_t k = 1; k < line.size(); ++k) L += (line[k] - line[k - 1]).norm();
+  return L;
+}
+
+/// The point at arc length `s` along the line.
+Vec3 point_at(const std::vector<Vec3>& line, double s) {
+  for (size_t k = 1; k < line.size(); ++k) {
+    const double l = (line[k] - line[k - 1]).norm();
+    if (s <= l && l > 0) return line[k - 1] + (s / l) * (line[k] - line[k - 1]);
+    s -= l;
+  }
+  return line.back();
+}
+
+}  // namespace
+
+SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double min_length) {
+  const auto& V = surface.V;
+  const auto& F = surface.F;
+  const Eigen::Index nv = V.rows();
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k)
+      if (F(f, k) < 0 || F(f, k) >= nv)
+        throw InvalidInput(surface.source + ": triangle " + std::to_string(f) + " has vertex index " +
+                           std::to_string(F(f, k)) + " outside 0.." + std::to_string(nv - 1));
+  std::vector<Vec3> normal(size_t(F.rows()), Vec3::Zero());
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Vec3 n = (V.row(F(f, 1)) - V.row(F(f, 0))).cross(V.row(F(f, 2)) - V.row(F(f, 0))).transpose();
+    if (n.norm() > 0) normal[size_t(f)] = n.normalized();
+  }
+  // edges as (low, high, face), sorted: an interior manifold edge appears twice
+  std::vector<std::array<int, 3>> half;
+  half.reserve(size_t(F.rows()) * 3);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = F(f, k), b = F(f, (k + 1) % 3);
+      half.push_back({std::min(a, b), std::max(a, b), int(f)});
+    }
+  std::sort(half.begin(), half.end());
+  const double cos_max = std::cos(angle_deg * M_PI / 180.0);
+  std::vector<std::vector<int>> adj(static_cast<size_t>(nv));  // sharp-edge neighbours
+  for (size_t i = 0; i < half.size();) {
+    size_t j = i;
+    while (j < half.size() && half[j][0] == half[i][0] && half[j][1] == half[i][1]) ++j;
+    if (j - i == 2) {
+      const Vec3& n0 = normal[size_t(half[i][2])];
+      const Vec3& n1 = normal[size_t(half[i + 1][2])];
+      if (n0.squaredNorm() > 0 && n1.squaredNorm() > 0 && n0.dot(n1) < cos_max) {
+        adj[size_t(half[i][0])].push_back(half[i][1]);
+        adj[size_t(half[i][1])].push_back(half[i][0]);
+      }
+    }
+    i = j;
+  }
+  auto is_node = [&](int v) { return adj[size_t(v)].size() != 2; };
+  std::vector<int> corner_of(size_t(nv), -1);
+  SurfaceCreases out;
+  std::vector<int> raw_corner_vertex;
+  for (Eigen::Index v = 0; v < nv; ++v)
+    if (adj[size_t(v)].size() >= 3) corner_of[size_t(v)] = int(raw_corner_vertex.size()), raw_corner_vertex.push_back(int(v));
+  // visited sharp edges, keyed by (low, high)
+  auto key = [&](int a, int b) { return (long long)std::min(a, b) * nv + std::max(a, b); };
+  std::unordered_map<long long, char> visited;
+  struct RawLine {
+    std::vector<int> verts;
+    bool closed;
+  };
+  std::vector<RawLine> raw;
+  auto walk = [&](int start, int next) {
+    RawLine r{{start}, false};
+    int prev = start, cur = next;
+    visited[key(prev, cur)] = 1;
+    while (true) {
+      r.verts.push_back(cur);
+      if (cur == start) {
+        r.closed = true;
+        break;
+      }
+      if (is_node(cur)) break;
+      int nxt = -1;
+      for (int w : adj[size_t(cur)])
+        if (w != prev && !visited.count(key(cur, w))) nxt = w;
+      if (nxt < 0) break;
+      visited[key(cur, nxt)] = 1;
+      prev = cur, cur = nxt;
+    }
+    raw.push_back(std::move(r));
+  };
+  for (Eigen::Index v = 0; v < nv; ++v)
+    if (!adj[size_t(v)].empty() && is_node(int(v)))
+      for (int w : adj[size_t(v)])
+        if (!visited.count(key(int(v), w))) walk(int(v), w);
+  for (Eigen::Index v = 0; v < nv; ++v)  // what is left are loops of degree-2 vertices
+    for (int w : adj[size_t(v)])
+      if (!visited.count(key(int(v), w))) walk(int(v), w);
+  std::vector<int> corner_index(raw_corner_vertex.size(), -1);
+  auto corner_id = [&](int v) {
+    const int c = corner_of[size_t(v)];
+    if (c < 0) return -1;
+    if (corner_index[size_t(c)] < 0) {
+      corner_index[size_t(c)] = int(out.corners.size());
+      out.corners.push_back(V.row(v).transpose());
+    }
+    return corner_index[size_t(c)];
+  };
+  for (const auto& r : raw) {
+    std::vector<Vec3> line;
+    for (int v : r.verts) line.push_back(V.row(v).transpose());
+    if (line.size() < 2 || line_length(line) < min_length) continue;
+    out.lines.push_back(std::move(line));
+    out.closed.push_back(r.closed);
+    out.start_corner.push_back(r.closed ? -1 : corner_id(r.verts.front()));
+    out.end_corner.push_back(r.closed ? -1 : corner_id(r.verts.back()));
+  }
+  return out;
+}
+
+Vec3 closest_on_line(const std::vector<Vec3>& line, const Vec3& x, Vec3* tangent) {
+  double best = std::numeric_limits<double>::infinity();
+  Vec3 out = line.front();
+  for (size_t k = 1; k < line.size(); ++k) {
+    const Vec3 a = line[k - 1], d = line[k] - a;
+    const double dd = d.squaredNorm();
+    const double t = dd > 0 ? std::clamp((x - a).dot(d) / dd, 0.0, 1.0) : 0.0;
+    const Vec3 p = a + t * d;
+    const double e = (p - x).squaredNorm();
+    if (e < best) {
+      best = e, out = p;
+      if (tangent) *tangent = dd > 0 ? Vec3(d / std::sqrt(dd)) : Vec3::Zero();
+    }
+  }
+  return out;
+}
+
+CreaseSnap snap_to_creases(const RowMatrixX3d& V, const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>& Q,
+                           const SurfaceCreases& creases, double reach) {
+  const int nv = int(V.rows());
+  CreaseSnap out;
+  out.line.assign(size_t(nv), -1);
+  out.corner.assign(size_t(nv), -1);
+  std::vector<std::vector<int>> adj(static_cast<size_t>(nv));
+  std::vector<char> on_boundary(size_t(nv), 0);
+  for (Eigen::Index q = 0; q < Q.rows(); ++q)
+    for (int k = 0; k < 4; ++k) {
+      const int a = Q(q, k), b = Q(q, (k + 1) % 4);
+      on_boundary[size_t(a)] = 1;
+      adj[size_t(a)].push_back(b);
+      adj[size_t(b)].push_back(a);
+    }
+  std::vector<int> bverts;
+  for (int v = 0; v < nv; ++v)
+    if (on_boundary[size_t(v)]) {
+      auto& a = adj[size_t(v)];
+      std::sort(a.begin(), a.end());
+      a.erase(std::unique(a.begin(), a.end()), a.end());
+      bverts.push_back(v);
+    }
+  auto pos = [&](int v) { return Vec3(V.row(v).transpose()); };
+  auto nearest = [&](const Vec3& p, const std::vector<int>& among) {
+    int best = -1;
+    double bd = reach * reach;
+    for (int v : among) {
+      const double d = (pos(v) - p).squaredNorm();
+      if (d <= bd) bd = d, best = v;
+    }
+    return best;
+  };
+  // corners first: each takes its nearest boundary vertex within reach, unless another corner has it
+  std::vector<int> corner_vertex(creases.corners.size(), -1);
+  for (size_t c = 0; c < creases.corners.size(); ++c) {
+    const int v = nearest(creases.corners[c], bverts);
+    if (v >= 0 && out.corner[size_t(v)] < 0) corner_vertex[c] = v, out.corner[size_t(v)] = int(c);
+  }
+  std::vector<double> dist(size_t(nv), std::numeric_limits<double>::infinity());
+  std::vector<double> cost(static_cast<size_t>(nv));
+  std::vector<int> from(size_t(nv), -1);
+  std::vector<char> blocked(size_t(nv), 0);
+  for (size_t l = 0; l < creases.lines.size(); ++l) {
+    const auto& line = creases.lines[l];
+    const double L = line_length(line);
+    Eigen::AlignedBox3d box;
+    for (const Vec3& p : line) box.extend(p);
+    box.min().array() -= reach;
+    box.max().array() += reach;
+    std::vector<int> near;
+    for (int v : bverts)
+      if (box.contains(pos(v)) && (closest_on_line(line, pos(v)) - pos(v)).norm() <= reach) {
+        near.push_back(v);
+        dist[size_t(v)] = (closest_on_line(line, pos(v)) - pos(v)).norm();
+      }
+    auto end_vertex = [&](int corner, const Vec3& p) {
+      if (corner >= 0 && corner_vertex[size_t(corner)] >= 0) return corner_vertex[size_t(corner)];
+      return nearest(p, near);
+    };
+    // Dijkstra from s to t over `near`, avoiding blocked vertices; returns the path (empty if none)
+    auto path_between = [&](int s, int t) {
+      std::vector<int> path;
+      for (int v : near) cost[size_t(v)] = std::numeric_limits<double>::infinity(), from[size_t(v)] = -1;
+      using QE = std::pair<double, int>;
+      std::priority_queue<QE, std::vector<QE>, std::greater<QE>> pq;
+      cost[size_t(s)] = 0;
+      pq.push({0.0, s});
+      while (!pq.empty()) {
+        auto [c, v] = pq.top();
+        pq.pop();
+        if (c > cost[size_t(v)]) continue;
+        if (v == t) break;
+        for (int w : adj[size_t(v)]) {
+          if (!std::isfinite(dist[size_t(w)]) || (blocked[size_t(w)] && w != t)) continue;
+          const double e = (pos(w) - pos(v)).norm() * (1.0 + 8.0 * 0.5 * (dist[size_t(v)] + dist[size_t(w)]) / reach);
+          if (c + e < cost[size_t(w)]) cost[size_t(w)] = c + e, from[size_t(w)] = v, pq.push({c + e, w});
+        }
+      }
+      if (!std::isfinite(cost[size_t(t)])) return path;
+      for (int v = t; v >= 0; v = from[size_t(v)]) {
+        path.push_back(v);
+        if (v == s) break;
+      }
+      std::reverse(path.begin(), path.end());
+      return path;
+    };
+    std::vector<int> path;
+    bool ok = near.size() >= 2;
+    if (ok && !creases.closed[l]) {
+      const int s = end_vertex(creases.start_corner[l], line.front());
+      const int t = end_vertex(creases.end_corner[l], line.back());
+      ok = s >= 0 && t >= 0 && s != t && std::isfinite(dist[size_t(s)]) && std::isfinite(dist[size_t(t)]);
+      if (ok) path = path_between(s, t);
+    } else if (ok) {
+      const int s = nearest(line.front(), near), m = nearest(point_at(line, 0.5 * L), near);
+      ok = s >= 0 && m >= 0 && s != m;
+      if (ok) {
+        path = path_between(s, m);
+        for (size_t k = 1; k + 1 < path.size(); ++k) blocked[size_t(path[k])] = 1;
+        std::vector<int> back = path.empty() ? std::vector<int>{} : path_between(m, s);
+        for (size_t k = 1; k + 1 < path.size(); ++k) blocked[size_t(path[k])] = 0;
+        if (back.size() < 2) path.clear();
+        else path.insert(path.end(), back.begin() + 1, back.end() - 1);
+      }
+    }
+    ok = ok && path.size() >= 2;
+    if (ok) {  // length, claims, and no quad with three vertices on the path (a staircase across quads)
+      double len = 0;
+      for (size_t k = 1; k < path.size(); ++k) len += (pos(path[k]) - pos(path[k - 1])).norm();
+      ok = len <= 2.0 * L + 2.0 * reach;
+      for (size_t k = 0; ok && k < path.size(); ++k) {
+        const int v = path[size_t(k)];
+        if (out.line[size_t(v)] >= 0 || blocked[size_t(v)]) ok = false;
+        const bool end = !creases.closed[l] && (k == 0 || k + 1 == path.size());
+        if (out.corner[size_t(v)] >= 0 && !end) ok = false;
+      }
+      if (ok) {
+        std::vector<char> on(size_t(nv), 0);
+        for (int v : path) on[size_t(v)] = 1;
+        for (Eigen::Index q = 0; ok && q < Q.rows(); ++q)
+          if (on[size_t(Q(q, 0))] + on[size_t(Q(q, 1))] + on[size_t(Q(q, 2))] + on[size_t(Q(q, 3))] >= 3) ok = false;
+      }
+    }
+    for (int v : near) dist[size_t(v)] = std::numeric_limits<double>::infinity();
+    if (!ok) {
+      ++out.lines_skipped;
+      continue;
+    }
+    ++out.lines_snapped;
+    for (int v : path)
+      if (out.corner[size_t(v)] < 0) out.line[size_t(v)] = int(l), blocked[size_t(v)] = 1;
+  }
+  for (int v = 0; v < nv; ++v) out.vertices += out.line[size_t(v)] >= 0 || out.corner[size_t(v)] >= 0;
+  return out;
+}
+
+}  // namespace polyhex

@@ -1,0 +1,59 @@
+/// @file features.h
+/// @brief Sharp creases of the input surface and the hex mesh's boundary vertices that follow them (beyond
+/// the paper: §6 projects every boundary vertex onto the closest surface point).
+///
+/// Closest-point projection does not know creases: a boundary quad that lies across a sharp crease keeps
+/// two corners on each side, and the sweeps press the two corners of one side together on the crease line
+/// (carter: pad hexes with outer quads 2.1 x 0.03 hex edges folded 100 degrees, scaled Jacobian 0). Here the
+/// crease lines are found on the surface (dihedral angle above a threshold), and for each one the path of
+/// hex boundary edges that runs closest to it is put on it: those vertices move along the crease only, and
+/// the vertices at crease corners (three or more creases) stay at the corner. The hexes beside a crease then
+/// have an edge on it instead of a face across it.
+#pragma once
+
+#include <vector>
+
+#include "nodes/artefacts/meshes.h"
+
+namespace polyhex {
+
+/// The crease lines of a surface: polylines of surface edges whose two triangles' normals differ by more
+/// than the threshold angle, split at crease corners (vertices with 1 or >= 3 crease edges).
+struct SurfaceCreases {
+  std::vector<std::vector<Eigen::Vector3d>> lines;  ///< polylines (>= 2 points); a closed loop repeats its first point
+  std::vector<char> closed;                         ///< per line: a closed loop
+  std::vector<int> start_corner, end_corner;        ///< per line: index into corners of its ends, -1 if none
+  std::vector<Eigen::Vector3d> corners;             ///< crease vertices with >= 3 crease edges
+};
+
+/// Finds the creases of a closed surface.
+/// \param angle_deg  a surface edge is sharp when its triangles' normals differ by more than this, (0, 180)
+/// \param min_length  lines shorter than this are dropped (noise), >= 0
+/// \throw InvalidInput when a triangle index is out of range
+SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double min_length);
+
+/// Closest point of polyline `line` to x; `tangent` (optional) the unit direction of its segment.
+Eigen::Vector3d closest_on_line(const std::vector<Eigen::Vector3d>& line, const Eigen::Vector3d& x,
+                                Eigen::Vector3d* tangent = nullptr);
+
+/// Which boundary vertices of a hex mesh follow which crease.
+struct CreaseSnap {
+  std::vector<int> line;       ///< per hex vertex: the crease line it moves along, -1 if none
+  std::vector<int> corner;     ///< per hex vertex: the crease corner it stays at, -1 if none
+  int lines_snapped = 0;       ///< crease lines with a path of boundary edges
+  int lines_skipped = 0;       ///< crease lines without an acceptable path (too far from every boundary edge path)
+  long vertices = 0;           ///< hex vertices on a crease line or at a corner
+};
+
+/// For every crease line, the path of boundary edges of the hex mesh between the boundary vertices nearest
+/// to its ends (Dijkstra over boundary edges within `reach` of the line, each edge's cost its length times
+/// 1 + 8 times its ends' mean distance to the line over `reach`); accepted when every path vertex is within
+/// `reach` of the line, the path is at most twice the line's length plus 2 `reach`, and it shares no vertex
+/// with an earlier path except at a corner. Corners: the boundary vertex nearest to each crease corner,
+/// within `reach`. Closed lines: two paths, to the vertex nearest the line's middle and back.
+/// \param V  hex mesh vertices   \param Q  its boundary quads (quality.h hex_boundary_quads)
+/// \param reach  how far a path vertex may be from its line (e.g. the hex edge length), > 0
+CreaseSnap snap_to_creases(const RowMatrixX3d& V, const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>& Q,
+                           const SurfaceCreases& creases, double reach);
+
+}  // namespace polyhex

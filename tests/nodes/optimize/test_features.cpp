@@ -1,0 +1,154 @@
+// Surface creases and the boundary vertices that follow them (features.h), and the optimizer's crease candidate.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "nodes/optimize/features.h"
+#include "nodes/optimize/optimize.h"
+#include "nodes/quality/quality.h"
+#include "runtime/errors.h"
+#include "tests/nodes/hex_extract/hex_test_util.h"
+
+using namespace polyhex;
+
+namespace {
+
+/// A closed cylinder of radius 1 and height 2 with n side segments; caps are fans around a centre vertex.
+SurfaceMesh cylinder(int n) {
+  SurfaceMesh s;
+  s.source = "cylinder";
+  s.V.resize(2 * n + 2, 3);
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * M_PI * i / n;
+    s.V.row(i) << std::cos(a), std::sin(a), 0;
+    s.V.row(n + i) << std::cos(a), std::sin(a), 2;
+  }
+  s.V.row(2 * n) << 0, 0, 0;
+  s.V.row(2 * n + 1) << 0, 0, 2;
+  s.F.resize(4 * n, 3);
+  for (int i = 0; i < n; ++i) {
+    const int j = (i + 1) % n;
+    s.F.row(4 * i) << i, j, n + j;
+    s.F.row(4 * i + 1) << i, n + j, n + i;
+    s.F.row(4 * i + 2) << 2 * n, j, i;
+    s.F.row(4 * i + 3) << 2 * n + 1, n + i, n + j;
+  }
+  return s;
+}
+
+bool on_box_edge(const Eigen::Vector3d& x, double n) {
+  int at = 0;
+  for (int a = 0; a < 3; ++a) at += std::abs(x[a]) < 1e-12 || std::abs(x[a] - n) < 1e-12;
+  return at >= 2;
+}
+
+}  // namespace
+
+TEST_CASE("find_creases: a box has 12 open crease lines between 8 corners; a cylinder two closed rims", "[features]") {
+  const SurfaceMesh box = test::voxel_surface(test::voxel_box(3, 3, 3));
+  const SurfaceCreases c = find_creases(box, 40, 0.5);
+  REQUIRE(c.lines.size() == 12);
+  CHECK(c.corners.size() == 8);
+  for (size_t l = 0; l < c.lines.size(); ++l) {
+    CHECK_FALSE(c.closed[l]);
+    CHECK(c.start_corner[l] >= 0);
+    CHECK(c.end_corner[l] >= 0);
+    CHECK(c.start_corner[l] != c.end_corner[l]);
+    CHECK((c.lines[l].back() - c.lines[l].front()).norm() == Approx(3.0));
+    for (const auto& p : c.lines[l]) CHECK(on_box_edge(p, 3));
+  }
+  for (const auto& p : c.corners) CHECK(((p.array().abs() < 1e-12) || ((p.array() - 3).abs() < 1e-12)).all());
+  CHECK(find_creases(box, 95, 0.5).lines.empty());   // the box's dihedral angles are 90 degrees
+  CHECK(find_creases(box, 40, 3.5).lines.empty());   // every line is 3 long
+
+  const SurfaceCreases r = find_creases(cylinder(24), 40, 0.5);  // side edges bend by 15 degrees only
+  REQUIRE(r.lines.size() == 2);
+  CHECK(r.corners.empty());
+  for (size_t l = 0; l < 2; ++l) {
+    CHECK(r.closed[l]);
+    CHECK(r.lines[l].size() == 25);
+    CHECK((r.lines[l].front() - r.lines[l].back()).norm() < 1e-12);
+  }
+  CHECK(find_creases(cylinder(24), 10, 0.5).lines.size() > 2);  // now the side edges are sharp too
+
+  SurfaceMesh bad = box;
+  bad.F(0, 1) = int(bad.V.rows());
+  CHECK_THROWS_AS(find_creases(bad, 40, 0.5), InvalidInput);
+}
+
+TEST_CASE("closest_on_line: the nearest point of a polyline and its segment's direction", "[features]") {
+  const std::vector<Eigen::Vector3d> line{{0, 0, 0}, {1, 0, 0}, {1, 2, 0}};
+  Eigen::Vector3d t;
+  CHECK((closest_on_line(line, {0.3, 0.5, 1}, &t) - Eigen::Vector3d(0.3, 0, 0)).norm() < 1e-15);
+  CHECK((t - Eigen::Vector3d(1, 0, 0)).norm() < 1e-15);
+  CHECK((closest_on_line(line, {3, 1.5, 0}, &t) - Eigen::Vector3d(1, 1.5, 0)).norm() < 1e-15);
+  CHECK((t - Eigen::Vector3d(0, 1, 0)).norm() < 1e-15);
+  CHECK((closest_on_line(line, {-2, -1, 0}) - Eigen::Vector3d(0, 0, 0)).norm() < 1e-15);
+}
+
+TEST_CASE("snap_to_creases: the box edges' grid vertices follow the edges, the grid's corners the box's corners",
+          "[features]") {
+  const HexMesh g = test::grid_hex_mesh(3, 3, 3);
+  const SurfaceMesh box = test::voxel_surface(test::voxel_box(3, 3, 3));
+  const SurfaceCreases c = find_creases(box, 40, 1.5);
+  const CreaseSnap s = snap_to_creases(g.V, hex_boundary_quads(g), c, 1.0);
+  CHECK(s.lines_snapped == 12);
+  CHECK(s.lines_skipped == 0);
+  CHECK(s.vertices == 12 * 2 + 8);
+  for (Eigen::Index v = 0; v < g.V.rows(); ++v) {
+    const Eigen::Vector3d x = g.V.row(v).transpose();
+    const bool snapped = s.line[size_t(v)] >= 0 || s.corner[size_t(v)] >= 0;
+    CHECK(snapped == on_box_edge(x, 3));
+    if (s.corner[size_t(v)] >= 0) CHECK((c.corners[size_t(s.corner[size_t(v)])] - x).norm() < 1e-12);
+    if (s.line[size_t(v)] >= 0) CHECK((closest_on_line(c.lines[size_t(s.line[size_t(v)])], x) - x).norm() < 1e-12);
+  }
+  // a line no boundary vertex comes near is skipped
+  SurfaceCreases far = c;
+  for (auto& line : far.lines)
+    for (auto& p : line) p += Eigen::Vector3d(10, 0, 0);
+  for (auto& p : far.corners) p += Eigen::Vector3d(10, 0, 0);
+  const CreaseSnap none = snap_to_creases(g.V, hex_boundary_quads(g), far, 1.0);
+  CHECK(none.lines_snapped == 0);
+  CHECK(none.lines_skipped == 12);
+  CHECK(none.vertices == 0);
+}
+
+TEST_CASE("optimizer: a poor result is tried again with the boundary on the creases, and kept if better",
+          "[features][optimize]") {
+  const SurfaceMesh box = test::voxel_surface(test::voxel_box(3, 3, 3));
+  const HexMesh clean = test::grid_hex_mesh(3, 3, 3);
+  // an edge vertex slid up its face: on the surface, but its hexes are sheared
+  HexMesh poor = clean;
+  poor.V.row(1) << 1, 0, 0.7;
+  OptimizeParams frozen;  // no phase runs: the candidates differ only by where their boundary is projected
+  frozen.untangle_iterations = frozen.global_iterations = frozen.iterations = 0;
+  frozen.element_iterations = frozen.smooth_iterations = frozen.shape_iterations = frozen.average_iterations = 0;
+  frozen.fallback_below_sj = 0.8;
+  REQUIRE(hex_quality(poor, nullptr).inverted == 0);
+  REQUIRE(hex_quality(poor, nullptr).sj_min < frozen.fallback_below_sj);
+  OptimizeStats st;
+  FallbackOutcome fb;
+  HexMesh out = optimize_hexes_or_fallback(poor, nullptr, box, frozen, &st, &fb);
+  CHECK(fb.creases_ran);
+  CHECK(fb.creases_kept);
+  CHECK(fb.creases_stats.crease_lines == 12);
+  CHECK(fb.creases_stats.crease_lines_snapped == 12);
+  CHECK(st.sj_min_after == Approx(1.0));
+  CHECK((out.V - clean.V).norm() < 1e-12);
+  CHECK(st.boundary_distance_max < 1e-12);
+  // off: the poor mesh stays as it is
+  frozen.feature_angle = 0;
+  out = optimize_hexes_or_fallback(poor, nullptr, box, frozen, &st, &fb);
+  CHECK_FALSE(fb.creases_ran);
+  CHECK((out.V - poor.V).norm() < 1e-12);
+  // a good first result: no second candidate
+  frozen.feature_angle = 40;
+  out = optimize_hexes_or_fallback(clean, nullptr, box, frozen, &st, &fb);
+  CHECK_FALSE(fb.creases_ran);
+  CHECK_FALSE(fb.creases_kept);
+  // the default run (all phases) on the poor mesh ends on the creases too, or as good without them
+  OptimizeStats full;
+  out = optimize_hexes_or_fallback(poor, nullptr, box, OptimizeParams{}, &full, &fb);
+  CHECK(full.inverted_after == 0);
+  CHECK(full.sj_min_after > 0.9);
+}
