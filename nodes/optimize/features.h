@@ -32,7 +32,9 @@ struct SurfaceCreases {
 /// \throw InvalidInput when a triangle index is out of range
 SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double min_length);
 
-/// Closest point of polyline `line` to x; `tangent` (optional) the unit direction of its segment.
+/// Closest point of polyline `line` to x; `tangent` (optional) the unit direction of its segment (zero for a
+/// zero-length one).
+/// \pre line has at least one point
 Eigen::Vector3d closest_on_line(const std::vector<Eigen::Vector3d>& line, const Eigen::Vector3d& x,
                                 Eigen::Vector3d* tangent = nullptr);
 
@@ -53,6 +55,8 @@ struct CreaseSnap {
 /// within `reach`. Closed lines: two paths, to the vertex nearest the line's middle and back.
 /// \param V  hex mesh vertices   \param Q  its boundary quads (quality.h hex_boundary_quads)
 /// \param reach  how far a path vertex may be from its line (e.g. the hex edge length), > 0
+/// \pre Q's indices are rows of V; creases from find_creases (lines of >= 2 points, corner indices in range)
+/// Never throws beyond std::bad_alloc: a line without an acceptable path is counted in lines_skipped.
 CreaseSnap snap_to_creases(const RowMatrixX3d& V, const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>& Q,
                            const SurfaceCreases& creases, double reach);
 
