@@ -72,11 +72,7 @@ SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double
     i = j;
   }
   auto is_node = [&](int v) { return adj[size_t(v)].size() != 2; };
-  std::vector<int> corner_of(size_t(nv), -1);
   SurfaceCreases out;
-  std::vector<int> raw_corner_vertex;
-  for (Eigen::Index v = 0; v < nv; ++v)
-    if (adj[size_t(v)].size() >= 3) corner_of[size_t(v)] = int(raw_corner_vertex.size()), raw_corner_vertex.push_back(int(v));
   // visited sharp edges, keyed by (low, high)
   auto key = [&](int a, int b) { return (long long)std::min(a, b) * nv + std::max(a, b); };
   std::unordered_map<long long, char> visited;
@@ -112,15 +108,15 @@ SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double
   for (Eigen::Index v = 0; v < nv; ++v)  // what is left are loops of degree-2 vertices
     for (int w : adj[size_t(v)])
       if (!visited.count(key(int(v), w))) walk(int(v), w);
-  std::vector<int> corner_index(raw_corner_vertex.size(), -1);
+  // a corner (>= 3 crease edges) enters out.corners when a kept line first ends at it
+  std::vector<int> corner_index(static_cast<size_t>(nv), -1);
   auto corner_id = [&](int v) {
-    const int c = corner_of[size_t(v)];
-    if (c < 0) return -1;
-    if (corner_index[size_t(c)] < 0) {
-      corner_index[size_t(c)] = int(out.corners.size());
+    if (adj[size_t(v)].size() < 3) return -1;
+    if (corner_index[size_t(v)] < 0) {
+      corner_index[size_t(v)] = int(out.corners.size());
       out.corners.push_back(V.row(v).transpose());
     }
-    return corner_index[size_t(c)];
+    return corner_index[size_t(v)];
   };
   for (const auto& r : raw) {
     std::vector<Vec3> line;
@@ -202,11 +198,11 @@ CreaseSnap snap_to_creases(const RowMatrixX3d& V, const Eigen::Matrix<int, Eigen
     box.min().array() -= reach;
     box.max().array() += reach;
     std::vector<int> near;
-    for (int v : bverts)
-      if (box.contains(pos(v)) && (closest_on_line(line, pos(v)) - pos(v)).norm() <= reach) {
-        near.push_back(v);
-        dist[size_t(v)] = (closest_on_line(line, pos(v)) - pos(v)).norm();
-      }
+    for (int v : bverts) {
+      if (!box.contains(pos(v))) continue;
+      const double d = (closest_on_line(line, pos(v)) - pos(v)).norm();
+      if (d <= reach) near.push_back(v), dist[size_t(v)] = d;
+    }
     auto end_vertex = [&](int corner, const Vec3& p) {
       if (corner >= 0 && corner_vertex[size_t(corner)] >= 0) return corner_vertex[size_t(corner)];
       return nearest(p, near);

@@ -361,7 +361,8 @@ class GlobalUntangler {
 
   /// L-BFGS (runtime/lbfgs.h) from x. Stops early, returning true, when the mesh (projected) is untangled
   /// (checked every 5 iterations): the later phases improve the quality. With `progress` >= 0 it also stops
-  /// when 25 iterations lower the energy by less than `progress` per active hex.
+  /// when 25 iterations gain less than `progress` per active hex: of the energy, or for raise_average of the
+  /// active hexes' scaled Jacobians.
   bool lbfgs(VecX& x, double eps, bool stop_when_untangled, int iterations, double progress = -1) {
     constexpr int kProgressCheck = 25;
     double mean_scale = 0;
