@@ -1,5 +1,7 @@
 #include "nodes/position_deform/position_deform.h"
 
+#include "nodes/polycube_segment/chart_order.h"
+
 #include <Eigen/Dense>
 #include <Eigen/IterativeLinearSolvers>
 #include <oneapi/tbb/parallel_for.h>
@@ -24,54 +26,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-struct UnionFind {
-  std::vector<int> p;
-  explicit UnionFind(int n) : p(n) { std::iota(p.begin(), p.end(), 0); }
-  int find(int x) { return p[x] == x ? x : p[x] = find(p[x]); }
-  bool unite(int a, int b) {
-    a = find(a), b = find(b);
-    if (a == b) return false;
-    p[std::max(a, b)] = std::min(a, b);
-    return true;
-  }
-};
-
-/// Unique undirected tet edges as (i, j), i < j.
-std::vector<std::pair<int, int>> tet_edges(const RowMatrixX4i& T) {
-  std::vector<uint64_t> keys;
-  keys.reserve(size_t(T.rows()) * 6);
-  static const int E[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-  for (Eigen::Index t = 0; t < T.rows(); ++t)
-    for (auto& e : E) {
-      uint64_t a = uint32_t(T(t, e[0])), b = uint32_t(T(t, e[1]));
-      if (a > b) std::swap(a, b);
-      keys.push_back(a << 32 | b);
-    }
-  std::sort(keys.begin(), keys.end());
-  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-  std::vector<std::pair<int, int>> out(keys.size());
-  for (size_t k = 0; k < keys.size(); ++k) out[k] = {int(keys[k] >> 32), int(keys[k] & 0xffffffffu)};
-  return out;
-}
-
-/// Adjacency lists (CSR) of the edge graph.
-struct Graph {
-  std::vector<int> start, nbr;
-  Graph(int n, const std::vector<std::pair<int, int>>& edges) : start(n + 1, 0), nbr(edges.size() * 2) {
-    for (auto& [a, b] : edges) ++start[a + 1], ++start[b + 1];
-    for (int i = 0; i < n; ++i) start[i + 1] += start[i];
-    std::vector<int> fill(start.begin(), start.end() - 1);
-    for (auto& [a, b] : edges) nbr[fill[a]++] = b, nbr[fill[b]++] = a;
-  }
-};
-
-/// An ordering requirement between two same-axis chart groups: sign * (k_q - k_p) >= 1.
-struct OrderedPair {
-  int p, q;
-  int sign;
-  double evidence;  ///< |separation| / h that the order was read from (stronger evidence wins a conflict)
-};
 
 /// Mean value coordinates of point x w.r.t. the triangle (p1,p2,p3) of a closed star polyhedron around x
 /// (Ju, Schaefer, Warren 2005, as used by [FKR05] for the 3D Laplacian). Adds to w[0..2].
@@ -164,8 +118,8 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
     }
   }
 
-  auto edges = tet_edges(input.T);
-  Graph graph(nV, edges);
+  const TetEdgeGraph graph(input.T, nV);
+  const auto& edges = graph.edges;
 
   // Charts of every vertex (boundary vertices only have any).
   std::vector<std::vector<int>> vcharts(nV);
@@ -175,6 +129,9 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
       int c = seg.chart[f];
       if (std::find(v.begin(), v.end(), c) == v.end()) v.push_back(c);
     }
+  std::vector<int> chart_label(nC);
+  std::vector<std::vector<int>> chart_neighbours(nC);
+  for (int c = 0; c < nC; ++c) chart_label[c] = seg.charts[c].label, chart_neighbours[c] = seg.charts[c].neighbours;
   std::vector<int> chart_vertices(nC, 0);
   for (int v = 0; v < nV; ++v)
     for (int c : vcharts[v]) ++chart_vertices[c];
@@ -242,95 +199,32 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
   auto solve_axis = [&](int a) {
     PositionDeformStats& st = axis_stats[size_t(a)];
     throw_if_interrupted();  // safe point: per axis
-    // Same-axis charts sharing a vertex are forced onto one plane (groups).
+    // The order evidence of the a-charts (chart_order.h): groups of same-axis charts sharing a vertex
+    // (one plane each), the Voronoi distance samples and the ordered pairs.
     std::vector<int> axis_charts;
     for (int c = 0; c < nC; ++c)
       if (label_axis(seg.charts[c].label) == a) axis_charts.push_back(c);
     if (axis_charts.empty())
       throw InvalidInput(input.source + ": the PolyCube structure has no chart on axis " + std::string(1, char('X' + a)));
-    UnionFind uf(nC);
-    std::vector<int> vgroup(nV, -1);  // representative a-chart of a vertex, -1 if none
-    for (int v = 0; v < nV; ++v)
-      for (int c : vcharts[v])
-        if (label_axis(seg.charts[c].label) == a) {
-          if (vgroup[v] >= 0 && uf.unite(vgroup[v], c)) ++st.merged_same_axis_charts;
-          vgroup[v] = c;
-        }
-    std::vector<int> group_index(nC, -1);
-    int nG = 0;
-    for (int c : axis_charts)
-      if (uf.find(c) == c) group_index[c] = nG++;
-    std::vector<int> chart_group(nC, -1);
-    for (int c : axis_charts) chart_group[c] = group_index[uf.find(c)];
-    for (int v = 0; v < nV; ++v)
-      if (vgroup[v] >= 0) vgroup[v] = chart_group[vgroup[v]];
-    std::vector<int> group_size(nG, 0);
-    std::vector<double> group_mean(nG, 0.0);
-    for (int v = 0; v < nV; ++v)
-      if (vgroup[v] >= 0) ++group_size[vgroup[v]], group_mean[vgroup[v]] += Vd(v, a);
-    for (int g = 0; g < nG; ++g) group_mean[g] /= std::max(1, group_size[g]);
-
-    // §5.2 approximate Voronoi partition of the volume by a-chart group (multi-source Dijkstra).
-    std::vector<double> dist(nV, std::numeric_limits<double>::infinity());
-    std::vector<int> src(nV, -1);
-    using QE = std::pair<double, int>;
-    std::priority_queue<QE, std::vector<QE>, std::greater<QE>> pq;
-    for (int v = 0; v < nV; ++v)
-      if (vgroup[v] >= 0) dist[v] = 0, src[v] = v, pq.push({0.0, v});
-    while (!pq.empty()) {
-      auto [dv, v] = pq.top();
-      pq.pop();
-      if (dv > dist[v]) continue;
-      for (int k = graph.start[v]; k < graph.start[v + 1]; ++k) {
-        int u = graph.nbr[k];
-        double du = dv + (Vd.row(u) - Vd.row(v)).norm();
-        if (du < dist[u]) dist[u] = du, src[u] = src[v], pq.push({du, u});
-      }
-    }
-    std::map<std::pair<int, int>, std::pair<double, int>> samples;  // (p<q) -> (sum δ, count)
-    for (auto& [i, j] : edges) {
-      if (src[i] < 0 || src[j] < 0) continue;
-      int gi = vgroup[src[i]], gj = vgroup[src[j]];
-      if (gi == gj) continue;
-      double delta = Vd(src[j], a) - Vd(src[i], a);
-      if (gi > gj) std::swap(gi, gj), delta = -delta;
-      auto& s = samples[{gi, gj}];
-      s.first += delta;
-      s.second += 1;
-    }
+    AxisChartOrder order = chart_order_evidence(Vd, graph, vcharts, chart_label, chart_neighbours, a, h);
+    st.merged_same_axis_charts += order.merged_same_axis_charts;
+    const int nG = order.groups;
+    const std::vector<int>& chart_group = order.chart_group;
+    const std::vector<int>& vgroup = order.vertex_group;
+    const std::vector<int>& group_size = order.group_size;
+    const std::vector<double>& group_mean = order.group_mean;
+    const std::vector<OrderedPair>& ordered = order.ordered;
     struct DistancePair {
       int p, q;
       double delta, w;
     };
     std::vector<DistancePair> dpairs;
-    std::vector<OrderedPair> ordered;
-    for (auto& [key, s] : samples) {
-      double delta = s.first / s.second;
-      double excess = std::max(std::abs(delta) - min_d, 0.0);
-      double w = p.distance_weight * std::min(group_size[key.first], group_size[key.second]) *
-                 std::exp(-excess * excess / (sigma * sigma));
-      if (w > 0) dpairs.push_back({key.first, key.second, delta, w});
-      if (std::abs(delta) > 0.5 * h) ordered.push_back({key.first, key.second, delta > 0 ? 1 : -1, std::abs(delta) / h});
+    for (auto& s : order.distance_samples) {
+      double excess = std::max(std::abs(s.delta) - min_d, 0.0);
+      double w = p.distance_weight * std::min(group_size[s.p], group_size[s.q]) * std::exp(-excess * excess / (sigma * sigma));
+      if (w > 0) dpairs.push_back({s.p, s.q, s.delta, w});
     }
     st.distance_pairs += int(dpairs.size());
-    // Bridged pairs: two a-groups bordering one chart of another axis are its two ends along a.
-    for (int b = 0; b < nC; ++b) {
-      if (label_axis(seg.charts[b].label) == a) continue;
-      std::vector<int> gs;
-      for (int c : seg.charts[b].neighbours)
-        if (chart_group[c] >= 0) gs.push_back(chart_group[c]);
-      std::sort(gs.begin(), gs.end());
-      gs.erase(std::unique(gs.begin(), gs.end()), gs.end());
-      for (size_t x = 0; x < gs.size(); ++x)
-        for (size_t y = x + 1; y < gs.size(); ++y) {
-          double diff = group_mean[gs[y]] - group_mean[gs[x]];
-          if (std::abs(diff) > 0.5 * h) ordered.push_back({gs[x], gs[y], diff > 0 ? 1 : -1, std::abs(diff) / h});
-        }
-    }
-    // A pair measured by the distance constraints comes first and wins over a bridged one.
-    std::stable_sort(ordered.begin(), ordered.end(), [](auto& x, auto& y) { return std::tie(x.p, x.q) < std::tie(y.p, y.q); });
-    ordered.erase(std::unique(ordered.begin(), ordered.end(), [](auto& x, auto& y) { return x.p == y.p && x.q == y.q; }),
-                  ordered.end());
     st.ordered_pairs += int(ordered.size());
 
     // Poisson step: unknowns = free vertices, then groups.
@@ -377,40 +271,17 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
     // at least one h above each chart below it, in topological order (longest path from the rounded values).
     // The previous per-pair nudging could undo itself on conflicting pairs and leave orders swapped.
     {
-      std::vector<int> idx(ordered.size());
-      std::iota(idx.begin(), idx.end(), 0);
-      std::stable_sort(idx.begin(), idx.end(), [&](int x, int y) { return ordered[x].evidence > ordered[y].evidence; });
-      std::vector<std::vector<int>> up(nG);
-      auto reaches = [&](int from, int to) {
-        std::vector<char> seen(nG, 0);
-        std::vector<int> stack{from};
-        seen[from] = 1;
-        while (!stack.empty()) {
-          int x = stack.back();
-          stack.pop_back();
-          if (x == to) return true;
-          for (int y : up[x])
-            if (!seen[y]) seen[y] = 1, stack.push_back(y);
-        }
-        return false;
-      };
+      const OrderAcceptance acc = accept_orders(ordered, nG);
+      st.order_constraints_dropped += int(acc.dropped.size());
       std::vector<int> indeg(nG, 0);
-      for (int i : idx) {
-        const OrderedPair& o = ordered[i];
-        int lo = o.sign > 0 ? o.p : o.q, hi = o.sign > 0 ? o.q : o.p;
-        if (reaches(hi, lo)) {
-          ++st.order_constraints_dropped;
-          continue;
-        }
-        up[lo].push_back(hi);
-        ++indeg[hi];
-      }
+      for (int g = 0; g < nG; ++g)
+        for (int x : acc.up[g]) ++indeg[x];
       std::vector<int> queue;
       for (int g = 0; g < nG; ++g)
         if (indeg[g] == 0) queue.push_back(g);
       for (size_t head = 0; head < queue.size(); ++head) {
         int x = queue[head];
-        for (int y : up[x]) {
+        for (int y : acc.up[x]) {
           k[y] = std::max(k[y], k[x] + 1);
           if (--indeg[y] == 0) queue.push_back(y);
         }

@@ -1,0 +1,193 @@
+#include "nodes/polycube_segment/chart_order.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <queue>
+#include <tuple>
+
+#include "nodes/artefacts/polycube.h"
+
+namespace polyhex {
+
+namespace {
+
+struct UnionFind {
+  std::vector<int> p;
+  explicit UnionFind(int n) : p(n) { std::iota(p.begin(), p.end(), 0); }
+  int find(int x) { return p[x] == x ? x : p[x] = find(p[x]); }
+  bool unite(int a, int b) {
+    a = find(a), b = find(b);
+    if (a == b) return false;
+    p[std::max(a, b)] = std::min(a, b);
+    return true;
+  }
+};
+
+}  // namespace
+
+TetEdgeGraph::TetEdgeGraph(const RowMatrixX4i& T, int vertices) : start(size_t(vertices) + 1, 0) {
+  std::vector<uint64_t> keys;
+  keys.reserve(size_t(T.rows()) * 6);
+  static const int E[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+  for (Eigen::Index t = 0; t < T.rows(); ++t)
+    for (auto& e : E) {
+      uint64_t a = uint32_t(T(t, e[0])), b = uint32_t(T(t, e[1]));
+      if (a > b) std::swap(a, b);
+      keys.push_back(a << 32 | b);
+    }
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  edges.resize(keys.size());
+  for (size_t k = 0; k < keys.size(); ++k) edges[k] = {int(keys[k] >> 32), int(keys[k] & 0xffffffffu)};
+  nbr.resize(edges.size() * 2);
+  for (auto& [a, b] : edges) ++start[size_t(a) + 1], ++start[size_t(b) + 1];
+  for (int i = 0; i < vertices; ++i) start[size_t(i) + 1] += start[size_t(i)];
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  for (auto& [a, b] : edges) nbr[fill[a]++] = b, nbr[fill[b]++] = a;
+}
+
+AxisChartOrder chart_order_evidence(const RowMatrixX3d& V, const TetEdgeGraph& graph,
+                                    const std::vector<std::vector<int>>& vertex_charts,
+                                    const std::vector<int>& chart_label,
+                                    const std::vector<std::vector<int>>& chart_neighbours, int a, double h) {
+  const int nV = int(V.rows()), nC = int(chart_label.size());
+  AxisChartOrder r;
+  // Same-axis charts sharing a vertex are forced onto one plane (groups).
+  std::vector<int> axis_charts;
+  for (int c = 0; c < nC; ++c)
+    if (label_axis(chart_label[c]) == a) axis_charts.push_back(c);
+  UnionFind uf(nC);
+  std::vector<int>& vgroup = r.vertex_group;
+  vgroup.assign(nV, -1);  // first: the representative a-chart of a vertex
+  for (int v = 0; v < nV; ++v)
+    for (int c : vertex_charts[v])
+      if (label_axis(chart_label[c]) == a) {
+        if (vgroup[v] >= 0 && uf.unite(vgroup[v], c)) ++r.merged_same_axis_charts;
+        vgroup[v] = c;
+      }
+  std::vector<int> group_index(nC, -1);
+  int nG = 0;
+  for (int c : axis_charts)
+    if (uf.find(c) == c) group_index[c] = nG++;
+  r.groups = nG;
+  r.chart_group.assign(nC, -1);
+  for (int c : axis_charts) r.chart_group[c] = group_index[uf.find(c)];
+  for (int v = 0; v < nV; ++v)
+    if (vgroup[v] >= 0) vgroup[v] = r.chart_group[vgroup[v]];
+  r.group_size.assign(nG, 0);
+  r.group_mean.assign(nG, 0.0);
+  for (int v = 0; v < nV; ++v)
+    if (vgroup[v] >= 0) ++r.group_size[vgroup[v]], r.group_mean[vgroup[v]] += V(v, a);
+  for (int g = 0; g < nG; ++g) r.group_mean[g] /= std::max(1, r.group_size[g]);
+
+  // §5.2 approximate Voronoi partition of the volume by a-chart group (multi-source Dijkstra).
+  std::vector<double> dist(nV, std::numeric_limits<double>::infinity());
+  std::vector<int> src(nV, -1);
+  using QE = std::pair<double, int>;
+  std::priority_queue<QE, std::vector<QE>, std::greater<QE>> pq;
+  for (int v = 0; v < nV; ++v)
+    if (vgroup[v] >= 0) dist[v] = 0, src[v] = v, pq.push({0.0, v});
+  while (!pq.empty()) {
+    auto [dv, v] = pq.top();
+    pq.pop();
+    if (dv > dist[v]) continue;
+    for (int k = graph.start[v]; k < graph.start[v + 1]; ++k) {
+      int u = graph.nbr[k];
+      double du = dv + (V.row(u) - V.row(v)).norm();
+      if (du < dist[u]) dist[u] = du, src[u] = src[v], pq.push({du, u});
+    }
+  }
+  std::map<std::pair<int, int>, std::pair<double, int>> samples;  // (p<q) -> (sum δ, count)
+  for (auto& [i, j] : graph.edges) {
+    if (src[i] < 0 || src[j] < 0) continue;
+    int gi = vgroup[src[i]], gj = vgroup[src[j]];
+    if (gi == gj) continue;
+    double delta = V(src[j], a) - V(src[i], a);
+    if (gi > gj) std::swap(gi, gj), delta = -delta;
+    auto& s = samples[{gi, gj}];
+    s.first += delta;
+    s.second += 1;
+  }
+  for (auto& [key, s] : samples) {
+    const double delta = s.first / s.second;
+    r.distance_samples.push_back({key.first, key.second, delta});
+    if (std::abs(delta) > 0.5 * h) r.ordered.push_back({key.first, key.second, delta > 0 ? 1 : -1, std::abs(delta) / h});
+  }
+  // Bridged pairs: two a-groups bordering one chart of another axis are its two ends along a.
+  for (int b = 0; b < nC; ++b) {
+    if (label_axis(chart_label[b]) == a) continue;
+    std::vector<int> gs;
+    for (int c : chart_neighbours[b])
+      if (r.chart_group[c] >= 0) gs.push_back(r.chart_group[c]);
+    std::sort(gs.begin(), gs.end());
+    gs.erase(std::unique(gs.begin(), gs.end()), gs.end());
+    for (size_t x = 0; x < gs.size(); ++x)
+      for (size_t y = x + 1; y < gs.size(); ++y) {
+        double diff = r.group_mean[gs[y]] - r.group_mean[gs[x]];
+        if (std::abs(diff) > 0.5 * h) r.ordered.push_back({gs[x], gs[y], diff > 0 ? 1 : -1, std::abs(diff) / h});
+      }
+  }
+  // A pair measured by the distance constraints comes first and wins over a bridged one.
+  auto& o = r.ordered;
+  std::stable_sort(o.begin(), o.end(), [](auto& x, auto& y) { return std::tie(x.p, x.q) < std::tie(y.p, y.q); });
+  o.erase(std::unique(o.begin(), o.end(), [](auto& x, auto& y) { return x.p == y.p && x.q == y.q; }), o.end());
+  return r;
+}
+
+OrderAcceptance accept_orders(const std::vector<OrderedPair>& ordered, int nG) {
+  OrderAcceptance r;
+  r.up.resize(nG);
+  std::vector<int> idx(ordered.size());
+  std::iota(idx.begin(), idx.end(), 0);
+  std::stable_sort(idx.begin(), idx.end(), [&](int x, int y) { return ordered[x].evidence > ordered[y].evidence; });
+  std::vector<char> seen(nG, 0);
+  std::vector<int> stack, touched;
+  auto reaches = [&](int from, int to) {
+    for (int x : touched) seen[x] = 0;
+    touched.assign(1, from);
+    stack.assign(1, from);
+    seen[from] = 1;
+    while (!stack.empty()) {
+      int x = stack.back();
+      stack.pop_back();
+      if (x == to) return true;
+      for (int y : r.up[x])
+        if (!seen[y]) seen[y] = 1, touched.push_back(y), stack.push_back(y);
+    }
+    return false;
+  };
+  for (int i : idx) {
+    const OrderedPair& o = ordered[i];
+    int lo = o.sign > 0 ? o.p : o.q, hi = o.sign > 0 ? o.q : o.p;
+    if (reaches(hi, lo)) {
+      r.dropped.push_back(i);
+      continue;
+    }
+    r.up[lo].push_back(hi);
+  }
+  return r;
+}
+
+std::vector<int> order_cycle(const OrderAcceptance& acc, const OrderedPair& o) {
+  const int lo = o.sign > 0 ? o.p : o.q, hi = o.sign > 0 ? o.q : o.p, nG = int(acc.up.size());
+  std::vector<int> pred(nG, -2);
+  std::vector<int> queue{hi};
+  pred[hi] = -1;
+  for (size_t head = 0; head < queue.size(); ++head) {
+    int x = queue[head];
+    if (x == lo) break;
+    for (int y : acc.up[x])
+      if (pred[y] == -2) pred[y] = x, queue.push_back(y);
+  }
+  std::vector<int> path;
+  if (pred[lo] == -2) return path;
+  for (int x = lo; x != -1; x = pred[x]) path.push_back(x);
+  std::reverse(path.begin(), path.end());
+  return path;
+}
+
+}  // namespace polyhex

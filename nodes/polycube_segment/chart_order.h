@@ -1,0 +1,84 @@
+/// @file chart_order.h
+/// @brief The order of same-axis charts as the deformed mesh shows it (paper §5.2's distance-preservation
+/// constraints and the ordering the rounding keeps). Shared by the PolyCube map (position_deform.h), which
+/// keeps these orders, and the structure extraction (polycube_segment.h), which cuts charts whose orders
+/// contradict each other, so that the map can keep them all.
+///
+/// Per axis a: same-axis charts sharing a vertex form one group (they must lie on one plane). A
+/// multi-source Dijkstra over the tet edges from the group vertices partitions the volume (approximate
+/// Voronoi partition, §5.2); every tet edge joining the regions of two groups p < q samples their axis
+/// distance d_a(closest vertex of q) − d_a(closest vertex of p), averaged per pair (the distance pairs).
+/// Besides, two groups bordering one chart of another axis are that chart's two ends along a (bridged
+/// pairs, ordered by the groups' mean coordinates). A pair separated by more than h/2 is ordered, with
+/// evidence |separation| / h; a distance pair wins over a bridged one of the same two groups.
+///
+/// The evidence can contradict itself (a cycle p < q < r < p) where charts are far from planar: no plane
+/// per group then keeps every order. accept_orders takes the pairs by decreasing evidence and drops each
+/// one that would close a cycle.
+#pragma once
+
+#include <utility>
+#include <vector>
+
+#include "nodes/artefacts/meshes.h"
+
+namespace polyhex {
+
+/// The unique edges of a tet mesh and their adjacency (CSR).
+struct TetEdgeGraph {
+  std::vector<std::pair<int, int>> edges;  ///< (i, j), i < j, sorted
+  std::vector<int> start, nbr;             ///< neighbours of v: nbr[start[v] .. start[v+1])
+  /// \pre every index of T is in [0, vertices)
+  TetEdgeGraph(const RowMatrixX4i& T, int vertices);
+};
+
+/// An ordering requirement between two same-axis chart groups p < q: sign * (k_q − k_p) >= 1.
+struct OrderedPair {
+  int p = 0, q = 0;
+  int sign = 1;
+  double evidence = 0;  ///< |separation| / h that the order was read from (stronger evidence wins a conflict)
+};
+
+struct AxisChartOrder {
+  int groups = 0;
+  int merged_same_axis_charts = 0;  ///< unions made (same-axis charts sharing a vertex)
+  std::vector<int> chart_group;     ///< per chart: its group, -1 for charts of the other axes
+  std::vector<int> vertex_group;    ///< per vertex: the group of its a-chart, -1 if none
+  std::vector<int> group_size;      ///< vertices per group
+  std::vector<double> group_mean;   ///< mean a-coordinate of a group's vertices
+  struct Sample {
+    int p, q;      ///< groups, p < q
+    double delta;  ///< mean axis distance (closest vertex of q minus closest vertex of p)
+  };
+  std::vector<Sample> distance_samples;  ///< sorted by (p, q)
+  std::vector<OrderedPair> ordered;      ///< unique by (p, q), sorted by (p, q)
+};
+
+/// The order evidence of the charts of axis `axis`.
+/// \param V               #V by 3 deformed vertex positions
+/// \param graph           the tet edges of the mesh V belongs to
+/// \param vertex_charts   per vertex the charts it lies on (boundary vertices only have any)
+/// \param chart_label     per chart its direction label 0..5
+/// \param chart_neighbours per chart its neighbouring charts
+/// \param h               hex edge length (the order threshold is h / 2)
+/// \pre vertex_charts.size() == V.rows() == graph.start.size() - 1, chart ids in [0, chart_label.size()),
+///      chart_neighbours.size() == chart_label.size(), 0 <= axis < 3, h > 0
+AxisChartOrder chart_order_evidence(const RowMatrixX3d& V, const TetEdgeGraph& graph,
+                                    const std::vector<std::vector<int>>& vertex_charts,
+                                    const std::vector<int>& chart_label,
+                                    const std::vector<std::vector<int>>& chart_neighbours, int axis, double h);
+
+struct OrderAcceptance {
+  std::vector<std::vector<int>> up;  ///< accepted orders as a graph: lower group -> upper groups
+  std::vector<int> dropped;          ///< indices into the ordered pairs of those dropped (each closed a cycle)
+};
+
+/// Accepts the ordered pairs by decreasing evidence (stable), dropping each that would close a cycle.
+/// \pre every pair's groups are in [0, groups)
+OrderAcceptance accept_orders(const std::vector<OrderedPair>& ordered, int groups);
+
+/// The groups of the cycle a dropped pair closes: a path from its upper to its lower group in the
+/// accepted graph (both ends included); empty when there is none.
+std::vector<int> order_cycle(const OrderAcceptance& accepted, const OrderedPair& dropped);
+
+}  // namespace polyhex
