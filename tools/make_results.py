@@ -97,7 +97,7 @@ def main():
             "–" if best is None else f"{best[1]:.3f} / {best[2]:.3f} ({best[0]})"))
         stage_rows.append("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |".format(
             name, fmt(align[-1] if align else None), m("segment", "charts"), m("segment", "corners"),
-            f"{m('segment', 'splits_multi_orientation')}/{m('segment', 'splits_wedge')}/{m('segment', 'splits_ramp')}",
+            f"{m('segment', 'splits_multi_orientation')}/{m('segment', 'splits_wedge')}/{m('segment', 'splits_ramp')}/{m('segment', 'splits_order_cycle')}",
             f"{m('polycube', 'inverted_tets_before_untangle')} -> {m('polycube', 'inverted_tets')} ({m('polycube', 'flat_tets')} flat)",
             fmt(m("polycube", "distortion")), m("polycube", "flipped_after_rounding"),
             fmt(m("polycube", "planarity_error"), ".0e"),
@@ -121,7 +121,7 @@ def main():
            "| model | tets | charts | hexes | inverted | SJ min | SJ avg | irregular % | Hausdorff mean / max (1e-3) | time s | paper min / avg | best min / avg |",
            "|---|---|---|---|---|---|---|---|---|---|---|---|"] + rows + [
            "", "## PolyCube stages", "",
-           "| model | alignment after §4 | charts | corners | splits (multi-orientation / wedge / ramp) | inverted tets of the map: final solve -> untangled (flat: 4 vertices on a plane or 3 on an edge) | map distortion (median) | chart pairs out of order | planarity error | seconds per stage |",
+           "| model | alignment after §4 | charts | corners | splits (multi-orientation / wedge / ramp / order cycle) | inverted tets of the map: final solve -> untangled (flat: 4 vertices on a plane or 3 on an edge) | map distortion (median) | chart pairs out of order | planarity error | seconds per stage |",
            "|---|---|---|---|---|---|---|---|---|---|"] + stage_rows + [
            "", "## Cross-check with hexcheck.py", "",
            "| model | SJ min hexcheck / ours | SJ min diff | SJ avg diff | inverted hexcheck / ours | Hausdorff mean hexcheck / ours (1e-3) |",

@@ -181,8 +181,8 @@ void write_segmentation(Writer& w, const PolyCubeSegmentation& s) {
     w.pod(std::int32_t(c.valence));
     w.vec(c.charts);
   }
-  for (int v : {s.splits_multi_orientation, s.splits_wedge, s.splits_ramp, s.splits_island, s.repaired_corners, s.removed_small,
-                s.smoothing_iterations})
+  for (int v : {s.splits_multi_orientation, s.splits_wedge, s.splits_ramp, s.splits_order_cycle, s.order_cycles,
+                s.splits_island, s.repaired_corners, s.removed_small, s.smoothing_iterations})
     w.pod(std::int32_t(v));
   w.flag(s.valid);
   w.vec(s.problems);
@@ -222,8 +222,8 @@ PolyCubeSegmentation read_segmentation(Reader& r) {
     c.valence = r.pod<std::int32_t>();
     c.charts = r.vec<int>();
   }
-  for (int* v : {&s.splits_multi_orientation, &s.splits_wedge, &s.splits_ramp, &s.splits_island, &s.repaired_corners,
-                 &s.removed_small, &s.smoothing_iterations})
+  for (int* v : {&s.splits_multi_orientation, &s.splits_wedge, &s.splits_ramp, &s.splits_order_cycle, &s.order_cycles,
+                 &s.splits_island, &s.repaired_corners, &s.removed_small, &s.smoothing_iterations})
     *v = r.pod<std::int32_t>();
   s.valid = r.flag();
   s.problems = r.vec<std::string>();

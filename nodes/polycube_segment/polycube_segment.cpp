@@ -1,5 +1,7 @@
 #include "nodes/polycube_segment/polycube_segment.h"
 
+#include "nodes/polycube_segment/chart_order.h"
+
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -361,7 +363,7 @@ int chart_at(const Surface& s, const std::vector<int>& chart, int v, const std::
 struct State {
   std::vector<int> label;      // #F
   std::vector<char> band;      // #F: inserted by a split
-  int splits_multi = 0, splits_wedge = 0, splits_ramp = 0, splits_island = 0, repaired_corners = 0, removed_small = 0;
+  int splits_multi = 0, splits_wedge = 0, splits_ramp = 0, splits_cycle = 0, splits_island = 0, repaired_corners = 0, removed_small = 0;
 };
 
 /// §5.1 multi-orientation charts: a chart touching a chart of the opposite direction along a
@@ -665,7 +667,9 @@ void split_wedges(const Surface& s, const std::vector<Vec3>& normal, const PolyC
 /// along their own axis (2nd to 98th percentile of the deformed coordinate). Each crossing of the
 /// chart's middle level by one of its smoothed edges is a cut start (an Extremum with cut_chart set,
 /// severity = the chart's span, width 2h: a separating chart of width h).
-std::vector<Extremum> find_ramps(const Surface& s, const Structure& S, int smoothing, double extent, double h) {
+/// `only`: when given, the charts to consider (others are skipped).
+std::vector<Extremum> find_ramps(const Surface& s, const Structure& S, int smoothing, double extent, double h,
+                                 const std::vector<char>* only = nullptr) {
   std::vector<std::vector<int>> verts(S.n);
   for (int t = 0; t < s.nf(); ++t)
     for (int v : (*s.F).row(t)) verts[S.chart[t]].push_back(v);
@@ -674,7 +678,7 @@ std::vector<Extremum> find_ramps(const Surface& s, const Structure& S, int smoot
     auto& vs = verts[c];
     std::sort(vs.begin(), vs.end());
     vs.erase(std::unique(vs.begin(), vs.end()), vs.end());
-    if (vs.size() < 8) continue;
+    if (vs.size() < 8 || (only && !(*only)[c])) continue;
     const int ax = label_axis(S.label[c]);
     std::vector<double> x(vs.size());
     for (size_t i = 0; i < vs.size(); ++i) x[i] = s.pos(vs[i])[ax];
@@ -721,6 +725,64 @@ void split_ramps(const Surface& s, const std::vector<Vec3>& normal, const PolyCu
       [](const Extremum&) { return true; });
 }
 
+/// Same-axis chart pairs whose order evidence closes a cycle (chart_order.h), summed over the axes, for
+/// the structure S; `cycle_charts`, when given, gets a flag per chart: on one of those cycles.
+int order_cycles(const Surface& s, const Structure& S, const TetEdgeGraph& graph, double h,
+                 std::vector<char>* cycle_charts) {
+  std::vector<std::vector<int>> vcharts(s.V->rows());
+  for (int t = 0; t < s.nf(); ++t)
+    for (int v : (*s.F).row(t)) {
+      auto& cs = vcharts[v];
+      if (std::find(cs.begin(), cs.end(), S.chart[t]) == cs.end()) cs.push_back(S.chart[t]);
+    }
+  if (cycle_charts) cycle_charts->assign(S.n, 0);
+  int total = 0;
+  for (int a = 0; a < 3; ++a) {
+    const AxisChartOrder order = chart_order_evidence(*s.V, graph, vcharts, S.label, S.adj, a, h);
+    const OrderAcceptance acc = accept_orders(order.ordered, order.groups);
+    total += int(acc.dropped.size());
+    if (!cycle_charts) continue;
+    std::vector<char> on_cycle(order.groups, 0);
+    for (int i : acc.dropped)
+      for (int g : order_cycle(acc, order.ordered[i])) on_cycle[g] = 1;
+    for (int c = 0; c < S.n; ++c)
+      if (order.chart_group[c] >= 0 && on_cycle[order.chart_group[c]]) (*cycle_charts)[c] = 1;
+  }
+  return total;
+}
+
+/// Order cycles (extension of §5.1, polycube_segment.h): while the charts' order evidence contradicts
+/// itself, cut one chart of a cycle across its middle level along its axis (the ramp cut, any span above
+/// the wedge rule's depth), the chart that spans most first; a cut is kept only when it is valid and
+/// lowers the number of cycle-closing pairs.
+void split_order_cycles(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p,
+                        const TetEdgeGraph& graph, State& st) {
+  const double h = p.hex_edge_length * s.diag;
+  while (st.splits_cycle < p.max_splits) {
+    throw_if_interrupted();
+    Structure S = analyse(s, st.label);
+    std::vector<char> on_cycle;
+    const int cycles = order_cycles(s, S, graph, h, &on_cycle);
+    if (cycles == 0) return;
+    const std::vector<Extremum> all =
+        find_ramps(s, S, p.edge_smoothing_iterations, p.extremum_depth * h, h, &on_cycle);
+    std::vector<Extremum> todo = all;
+    std::stable_sort(todo.begin(), todo.end(), [](const Extremum& u, const Extremum& v) { return u.severity > v.severity; });
+    if (int(todo.size()) > p.max_cut_candidates) todo.resize(size_t(p.max_cut_candidates));
+    bool applied = false;
+    for (auto& x : todo) {
+      State trial = st;
+      if (!cut_wedge(s, normal, S, x, all, p, trial)) continue;
+      if (order_cycles(s, analyse(s, trial.label), graph, h, nullptr) >= cycles) continue;
+      st = std::move(trial);
+      ++st.splits_cycle;
+      applied = true;
+      break;
+    }
+    if (!applied) return;
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Result and validity
 
@@ -760,6 +822,7 @@ PolyCubeSegmentation make_result(const Surface& s, const State& st) {
   r.splits_multi_orientation = st.splits_multi;
   r.splits_wedge = st.splits_wedge;
   r.splits_ramp = st.splits_ramp;
+  r.splits_order_cycle = st.splits_cycle;
   r.splits_island = st.splits_island;
   r.repaired_corners = st.repaired_corners;
   r.removed_small = st.removed_small;
@@ -1134,7 +1197,9 @@ void repair(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSeg
 }
 
 /// One full §5.1 run with a given number of normal-smoothing passes.
-PolyCubeSegmentation segment_once(const Surface& s, const PolyCubeSegmentParams& p, int smoothing) {
+/// `graph`: the deformed mesh's tet edges (for the order cycles).
+PolyCubeSegmentation segment_once(const Surface& s, const PolyCubeSegmentParams& p, int smoothing,
+                                  const TetEdgeGraph& graph) {
   throw_if_interrupted();
   std::vector<Vec3> normal = smoothed_normals(s, smoothing);
   State st;
@@ -1146,9 +1211,11 @@ PolyCubeSegmentation segment_once(const Surface& s, const PolyCubeSegmentParams&
   if (p.split_multi_orientation) split_multi_orientation(s, normal, h, p.max_splits, st);
   if (p.split_wedges) split_wedges(s, normal, p, st);
   if (p.split_ramps) split_ramps(s, normal, p, st);
+  if (p.split_order_cycles) split_order_cycles(s, normal, p, graph, st);
   if (p.final_cleanup) remove_small_invalid(s, normal, p, st);
   repair(s, normal, p, st);
   PolyCubeSegmentation r = make_result(s, st);
+  r.order_cycles = order_cycles(s, analyse(s, st.label), graph, p.hex_edge_length * s.diag, nullptr);
   r.smoothing_iterations = smoothing;
   return r;
 }
@@ -1205,11 +1272,12 @@ RowMatrixX3i boundary_triangles(const TetMesh& mesh) {
 PolyCubeSegmentation segment_polycube(const TetMesh& deformed, const PolyCubeSegmentParams& p) {
   RowMatrixX3i F = boundary_triangles(deformed);
   Surface s = build_surface(deformed.V, F);
-  PolyCubeSegmentation best = segment_once(s, p, p.smoothing_iterations);
+  const TetEdgeGraph graph(deformed.T, int(deformed.V.rows()));
+  PolyCubeSegmentation best = segment_once(s, p, p.smoothing_iterations, graph);
   int smoothing = p.smoothing_iterations;
   for (int retry = 0; retry < p.fallback_retries && !best.valid; ++retry) {
     smoothing = std::max(1, 2 * smoothing);
-    PolyCubeSegmentation r = segment_once(s, p, smoothing);
+    PolyCubeSegmentation r = segment_once(s, p, smoothing, graph);
     if (r.valid) {
       r.warnings.push_back("PolyCube structure invalid with " + std::to_string(p.smoothing_iterations) +
                            " normal smoothing passes (" + std::to_string(best.problems.size()) +

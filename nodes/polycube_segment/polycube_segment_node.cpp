@@ -15,6 +15,8 @@ json segmentation_metrics(const PolyCubeSegmentation& s) {
   m["splits_multi_orientation"] = s.splits_multi_orientation;
   m["splits_wedge"] = s.splits_wedge;
   m["splits_ramp"] = s.splits_ramp;
+  m["splits_order_cycle"] = s.splits_order_cycle;
+  m["order_cycles"] = s.order_cycles;
   m["splits_island"] = s.splits_island;
   m["repaired_corners"] = s.repaired_corners;
   m["removed_small"] = s.removed_small;
@@ -44,6 +46,8 @@ const bool registered = register_node(make_node<P>(
         .add("max_cut_candidates", &P::max_cut_candidates, "cut candidates tested per wedge", 1, 100000)
         .add("split_ramps", &P::split_ramps, "cut charts that climb far along their own axis (extension)")
         .add("ramp_extent", &P::ramp_extent, "a ramp spans more than this many hex edges along its axis", 0, 1e6)
+        .add("split_order_cycles", &P::split_order_cycles,
+             "cut charts whose same-axis order evidence forms a cycle (extension)")
         .add("max_splits", &P::max_splits, "maximum separating charts of each kind", 0, 10000)
         .add("final_cleanup", &P::final_cleanup, "after the splits, remove small charts with < 4 neighbours")
         .add("split_islands", &P::split_islands, "cut ring charts from the boundary of a chart with < 4 neighbours")
@@ -64,7 +68,7 @@ const bool registered = register_node(make_node<P>(
                  json(s.failing_charts).dump() + ")");
       }
       return make_artefact(std::make_shared<const PolyCubeSegmentation>(std::move(s)));
-    }).with_version("3"));
+    }).with_version("4"));
 
 }  // namespace
 }  // namespace polyhex

@@ -56,6 +56,8 @@ PolyCubeSegmentation segmentation() {
   s.splits_multi_orientation = 1;
   s.splits_wedge = 2;
   s.splits_ramp = 3;
+  s.splits_order_cycle = 7;
+  s.order_cycles = 8;
   s.splits_island = 3;
   s.repaired_corners = 4;
   s.removed_small = 5;
@@ -96,6 +98,8 @@ void check_equal(const PolyCubeSegmentation& a, const PolyCubeSegmentation& b) {
   CHECK(a.splits_multi_orientation == b.splits_multi_orientation);
   CHECK(a.splits_wedge == b.splits_wedge);
   CHECK(a.splits_ramp == b.splits_ramp);
+  CHECK(a.splits_order_cycle == b.splits_order_cycle);
+  CHECK(a.order_cycles == b.order_cycles);
   CHECK(a.splits_island == b.splits_island);
   CHECK(a.repaired_corners == b.repaired_corners);
   CHECK(a.removed_small == b.removed_small);
