@@ -1194,6 +1194,14 @@ void repair(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSeg
     if (p.repair_corners) repair_corners(s, normal, h, p.max_splits, trial);
     if (structure_score(s, trial) < structure_score(s, st)) st = std::move(trial);
   }
+  // The repairs themselves can leave small charts with fewer than 4 neighbours (a cut or a relabelled
+  // patch that isolates a sliver): remove them once more, as final_cleanup did before the repairs.
+  if (p.final_cleanup && !make_result(s, st).valid) {
+    State trial = st;
+    remove_small_invalid(s, normal, p, trial);
+    if (p.repair_corners) repair_corners(s, normal, h, p.max_splits, trial);
+    if (structure_score(s, trial) < structure_score(s, st)) st = std::move(trial);
+  }
 }
 
 /// One full §5.1 run with a given number of normal-smoothing passes.

@@ -68,7 +68,7 @@ const bool registered = register_node(make_node<P>(
                  json(s.failing_charts).dump() + ")");
       }
       return make_artefact(std::make_shared<const PolyCubeSegmentation>(std::move(s)));
-    }).with_version("4"));
+    }).with_version("5"));
 
 }  // namespace
 }  // namespace polyhex

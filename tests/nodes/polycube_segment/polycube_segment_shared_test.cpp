@@ -135,3 +135,24 @@ TEST_CASE("shared cuboid_screw_thread: the helical strips are cut into flat char
   CHECK(max_chart_span(deformed, s) <= p.ramp_extent * hex_edge(deformed));
   for (auto& c : s.corners) CHECK(c.valence == 3);
 }
+
+// femur at tet edge 0.019: the repairs (island cuts, corner patches, the second multi-orientation
+// split) left three small charts with 2 neighbours each (0.02-0.13 % of the area; at 58f59cb the structure
+// was invalid with every fallback smoothing); they are now removed once more after the repairs.
+TEST_CASE("shared femur: small charts the repairs leave with < 4 neighbours are removed", "[segment][shared]") {
+  const std::filesystem::path f = std::filesystem::path(POLYHEX_SHARED_DIR) / "data" / "surfaces" / "femur.obj";
+  if (!std::filesystem::exists(f)) {
+    WARN("skipped: " << f << " missing");
+    SUCCEED();
+    return;
+  }
+  TetgenParams tp;
+  tp.edge_length = 0.019;
+  const TetMesh deformed = rotation_deform(tetrahedralize(read_surface(f), tp), RotationDeformParams{}).mesh;
+  const PolyCubeSegmentation s = segment_polycube(deformed);
+  INFO((s.problems.empty() ? std::string("valid") : s.problems.front()));
+  CHECK(s.valid);
+  CHECK(s.smoothing_iterations == PolyCubeSegmentParams{}.smoothing_iterations);  // no fallback needed
+  for (auto& c : s.charts) CHECK(c.neighbours.size() >= 4);
+  for (auto& c : s.corners) CHECK(c.valence == 3);
+}
