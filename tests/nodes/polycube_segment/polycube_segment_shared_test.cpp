@@ -28,6 +28,20 @@ double max_chart_span(const TetMesh& m, const PolyCubeSegmentation& s) {
   return out;
 }
 
+/// The rotation-driven deformation of a shared model tetrahedralized at tet edge `edge`; false (and a
+/// WARN) when ../shared is not there.
+bool deformed_shared(const char* file, double edge, TetMesh& out) {
+  const std::filesystem::path f = std::filesystem::path(POLYHEX_SHARED_DIR) / "data" / "surfaces" / file;
+  if (!std::filesystem::exists(f)) {
+    WARN("skipped: " << f << " missing");
+    return false;
+  }
+  TetgenParams tp;
+  tp.edge_length = edge;
+  out = rotation_deform(tetrahedralize(read_surface(f), tp), RotationDeformParams{}).mesh;
+  return true;
+}
+
 }  // namespace
 
 TEST_CASE("shared surfaces: tetrahedralize, rotation_deform, polycube_segment give valid structures",
@@ -92,15 +106,11 @@ TEST_CASE("shared surfaces: tetrahedralize, rotation_deform, polycube_segment gi
 // repair's second multi-orientation split separates them.
 TEST_CASE("shared fertility: opposite charts that meet after the wedge cuts get a separating chart",
           "[segment][shared]") {
-  const std::filesystem::path f = std::filesystem::path(POLYHEX_SHARED_DIR) / "data" / "surfaces" / "fertility.off";
-  if (!std::filesystem::exists(f)) {
-    WARN("skipped: " << f << " missing");
+  TetMesh deformed;
+  if (!deformed_shared("fertility.off", 0.03, deformed)) {
     SUCCEED();
     return;
   }
-  TetgenParams tp;
-  tp.edge_length = 0.03;
-  const TetMesh deformed = rotation_deform(tetrahedralize(read_surface(f), tp), RotationDeformParams{}).mesh;
   const PolyCubeSegmentation s = segment_polycube(deformed);
   INFO((s.problems.empty() ? std::string("valid") : s.problems.front()));
   CHECK(s.valid);
@@ -113,16 +123,11 @@ TEST_CASE("shared fertility: opposite charts that meet after the wedge cuts get 
 // flatten a helix). Before the ramp split its PolyCube map folded and 13 hexes stayed inverted. At the
 // tet edge of configs/polycube.json (0.02; at 0.06 one tet spans the bar).
 TEST_CASE("shared cuboid_screw_thread: the helical strips are cut into flat charts", "[segment][shared]") {
-  const std::filesystem::path f =
-      std::filesystem::path(POLYHEX_SHARED_DIR) / "data" / "surfaces" / "cuboid_screw_thread.stl";
-  if (!std::filesystem::exists(f)) {
-    WARN("skipped: " << f << " missing");
+  TetMesh deformed;
+  if (!deformed_shared("cuboid_screw_thread.stl", 0.02, deformed)) {
     SUCCEED();
     return;
   }
-  TetgenParams tp;
-  tp.edge_length = 0.02;
-  const TetMesh deformed = rotation_deform(tetrahedralize(read_surface(f), tp), RotationDeformParams{}).mesh;
   PolyCubeSegmentParams p;
   p.split_ramps = false;
   const PolyCubeSegmentation before = segment_polycube(deformed, p);
@@ -140,15 +145,11 @@ TEST_CASE("shared cuboid_screw_thread: the helical strips are cut into flat char
 // split) left three small charts with 2 neighbours each (0.02-0.13 % of the area; at 58f59cb the structure
 // was invalid with every fallback smoothing); they are now removed once more after the repairs.
 TEST_CASE("shared femur: small charts the repairs leave with < 4 neighbours are removed", "[segment][shared]") {
-  const std::filesystem::path f = std::filesystem::path(POLYHEX_SHARED_DIR) / "data" / "surfaces" / "femur.obj";
-  if (!std::filesystem::exists(f)) {
-    WARN("skipped: " << f << " missing");
+  TetMesh deformed;
+  if (!deformed_shared("femur.obj", 0.019, deformed)) {
     SUCCEED();
     return;
   }
-  TetgenParams tp;
-  tp.edge_length = 0.019;
-  const TetMesh deformed = rotation_deform(tetrahedralize(read_surface(f), tp), RotationDeformParams{}).mesh;
   const PolyCubeSegmentation s = segment_polycube(deformed);
   INFO((s.problems.empty() ? std::string("valid") : s.problems.front()));
   CHECK(s.valid);
