@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <memory>
 #include <array>
 #include <cmath>
 #include <functional>
@@ -1205,9 +1206,9 @@ void repair(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSeg
 }
 
 /// One full §5.1 run with a given number of normal-smoothing passes.
-/// `graph`: the deformed mesh's tet edges (for the order cycles).
+/// `graph`: the deformed mesh's tet edges (for the order cycles; only used with p.split_order_cycles).
 PolyCubeSegmentation segment_once(const Surface& s, const PolyCubeSegmentParams& p, int smoothing,
-                                  const TetEdgeGraph& graph) {
+                                  const TetEdgeGraph* graph) {
   throw_if_interrupted();
   std::vector<Vec3> normal = smoothed_normals(s, smoothing);
   State st;
@@ -1219,11 +1220,11 @@ PolyCubeSegmentation segment_once(const Surface& s, const PolyCubeSegmentParams&
   if (p.split_multi_orientation) split_multi_orientation(s, normal, h, p.max_splits, st);
   if (p.split_wedges) split_wedges(s, normal, p, st);
   if (p.split_ramps) split_ramps(s, normal, p, st);
-  if (p.split_order_cycles) split_order_cycles(s, normal, p, graph, st);
+  if (p.split_order_cycles) split_order_cycles(s, normal, p, *graph, st);
   if (p.final_cleanup) remove_small_invalid(s, normal, p, st);
   repair(s, normal, p, st);
   PolyCubeSegmentation r = make_result(s, st);
-  r.order_cycles = order_cycles(s, analyse(s, st.label), graph, p.hex_edge_length * s.diag, nullptr);
+  r.order_cycles = p.split_order_cycles ? order_cycles(s, analyse(s, st.label), *graph, p.hex_edge_length * s.diag, nullptr) : -1;
   r.smoothing_iterations = smoothing;
   return r;
 }
@@ -1280,12 +1281,13 @@ RowMatrixX3i boundary_triangles(const TetMesh& mesh) {
 PolyCubeSegmentation segment_polycube(const TetMesh& deformed, const PolyCubeSegmentParams& p) {
   RowMatrixX3i F = boundary_triangles(deformed);
   Surface s = build_surface(deformed.V, F);
-  const TetEdgeGraph graph(deformed.T, int(deformed.V.rows()));
-  PolyCubeSegmentation best = segment_once(s, p, p.smoothing_iterations, graph);
+  std::unique_ptr<TetEdgeGraph> graph;  // the order cycles' evidence needs the tet edges (not built when off)
+  if (p.split_order_cycles) graph = std::make_unique<TetEdgeGraph>(deformed.T, int(deformed.V.rows()));
+  PolyCubeSegmentation best = segment_once(s, p, p.smoothing_iterations, graph.get());
   int smoothing = p.smoothing_iterations;
   for (int retry = 0; retry < p.fallback_retries && !best.valid; ++retry) {
     smoothing = std::max(1, 2 * smoothing);
-    PolyCubeSegmentation r = segment_once(s, p, smoothing, graph);
+    PolyCubeSegmentation r = segment_once(s, p, smoothing, graph.get());
     if (r.valid) {
       r.warnings.push_back("PolyCube structure invalid with " + std::to_string(p.smoothing_iterations) +
                            " normal smoothing passes (" + std::to_string(best.problems.size()) +
@@ -1296,6 +1298,15 @@ PolyCubeSegmentation segment_polycube(const TetMesh& deformed, const PolyCubeSeg
   }
   best.source = deformed.source;
   return best;
+}
+
+int count_order_cycles(const TetMesh& deformed, const PolyCubeSegmentation& seg, double hex_edge_length) {
+  if (seg.F.rows() == 0 || seg.label.size() != seg.F.rows())
+    throw InvalidInput("count_order_cycles: the segmentation has no labelled triangles");
+  Surface s = build_surface(deformed.V, seg.F);
+  std::vector<int> label(seg.label.data(), seg.label.data() + seg.label.size());
+  const TetEdgeGraph graph(deformed.T, int(deformed.V.rows()));
+  return order_cycles(s, analyse(s, label), graph, hex_edge_length * s.diag, nullptr);
 }
 
 PolyCubeSegmentation analyse_polycube_labels(const RowMatrixX3d& V, const RowMatrixX3i& F,

@@ -30,7 +30,8 @@
 ///   swaps the weakest. While there are such cycles, a chart on one is cut across its middle level
 ///   along its axis (the ramp cut above, any chart spanning more than extremum_depth hex edges, the
 ///   widest first, up to max_cut_candidates starts); a cut is kept only when valid and when it lowers
-///   the number of cycle-closing pairs. What is left is reported (order_cycles) either way.
+///   the number of cycle-closing pairs. What is left is reported (order_cycles; -1 when off, as the tet
+///   edges and the evidence are then not computed: the PolyCube map reports its swapped pairs anyway).
 ///   Off by default. Measured (configs/polycube.json, tet edge 0.02): the twist's map keeps 1 order
 ///   cycle instead of 7 (534 -> 116 inverted tets, distortion 1.093 -> 1.083), femur's 0 instead of 1
 ///   (17,171 -> 17,092); all other shared models have none. But the hex meshes did not follow: twist 0 ->
@@ -91,6 +92,12 @@ RowMatrixX3i boundary_triangles(const TetMesh& mesh);
 /// \throw InvalidInput when the boundary is empty or not a closed 2-manifold (names an edge)
 /// \throw Interrupted after SIGINT/SIGTERM (runtime/cancel.h), checked between the repair passes
 PolyCubeSegmentation segment_polycube(const TetMesh& deformed, const PolyCubeSegmentParams& p = {});
+
+/// Same-axis chart pairs of `seg` whose order evidence on `deformed` closes a cycle (chart_order.h),
+/// at hex edge hex_edge_length × the boundary's bbox diagonal: what split_order_cycles reduces.
+/// \pre seg was made on deformed (its triangles index deformed.V), hex_edge_length > 0
+/// \throw InvalidInput when seg has no labelled triangles or a triangle index is out of range
+int count_order_cycles(const TetMesh& deformed, const PolyCubeSegmentation& seg, double hex_edge_length);
 
 /// Charts, edges, corners and validity of a given labelling, without clean-up or splits.
 /// \param V      #V by 3 vertex positions
