@@ -260,7 +260,7 @@ CreaseSnap snap_to_creases(const RowMatrixX3d& V, const Eigen::Matrix<int, Eigen
       ok = len <= 2.0 * L + 2.0 * reach;
       for (size_t k = 0; ok && k < path.size(); ++k) {
         const int v = path[size_t(k)];
-        if (out.line[size_t(v)] >= 0 || blocked[size_t(v)]) ok = false;
+        if (blocked[size_t(v)]) ok = false;  // on an accepted line (blocked is set with out.line)
         const bool end = !creases.closed[l] && (k == 0 || k + 1 == path.size());
         if (out.corner[size_t(v)] >= 0 && !end) ok = false;
       }

@@ -60,19 +60,18 @@ const bool registered = register_node(make_node<P>(
       auto fallback = in.has(2) ? in.get<HexMesh>(2) : nullptr;
       HexMesh out = optimize_hexes_or_fallback(*in.get<HexMesh>(0), fallback.get(), *in.get<SurfaceMesh>(1), p, &s, &fb);
       auto& j = ctx.metrics;
-      j["fallback_ran"] = fb.ran;
-      j["fallback_kept"] = fb.kept;
-      if (fb.ran) {
-        j["fallback_inverted"] = fb.stats.inverted_after;
-        j["fallback_sj_min"] = fb.stats.sj_min_after;
-        j["fallback_seconds"] = fb.stats.seconds;
-      }
-      j["creases_ran"] = fb.creases_ran;
-      j["creases_kept"] = fb.creases_kept;
+      // <name>_ran, _kept, and the figures of a candidate that ran
+      auto candidate = [&](const std::string& name, bool ran, bool kept, const OptimizeStats& cs) {
+        j[name + "_ran"] = ran;
+        j[name + "_kept"] = kept;
+        if (!ran) return;
+        j[name + "_inverted"] = cs.inverted_after;
+        j[name + "_sj_min"] = cs.sj_min_after;
+        j[name + "_seconds"] = cs.seconds;
+      };
+      candidate("fallback", fb.ran, fb.kept, fb.stats);
+      candidate("creases", fb.creases_ran, fb.creases_kept, fb.creases_stats);
       if (fb.creases_ran) {
-        j["creases_inverted"] = fb.creases_stats.inverted_after;
-        j["creases_sj_min"] = fb.creases_stats.sj_min_after;
-        j["creases_seconds"] = fb.creases_stats.seconds;
         j["crease_lines"] = fb.creases_stats.crease_lines;
         j["crease_lines_snapped"] = fb.creases_stats.crease_lines_snapped;
         j["crease_vertices"] = fb.creases_stats.crease_vertices;

@@ -13,8 +13,6 @@
 #include <cstdio>
 #include <limits>
 #include <map>
-#include <numeric>
-#include <queue>
 
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
