@@ -7,6 +7,8 @@
 #include <map>
 #include <numeric>
 #include <queue>
+#include <stdexcept>
+#include <string>
 #include <tuple>
 
 #include "nodes/artefacts/polycube.h"
@@ -170,6 +172,63 @@ OrderAcceptance accept_orders(const std::vector<OrderedPair>& ordered, int nG) {
     r.up[lo].push_back(hi);
   }
   return r;
+}
+
+std::vector<long> place_levels(const OrderAcceptance& acc, const std::vector<double>& target,
+                               const std::vector<double>& weight, int max_sweeps) {
+  const int nG = int(acc.up.size());
+  if (int(target.size()) != nG || int(weight.size()) != nG)
+    throw std::invalid_argument("place_levels: " + std::to_string(nG) + " groups, " + std::to_string(target.size()) +
+                                " targets, " + std::to_string(weight.size()) + " weights");
+  for (double w : weight)
+    if (!(w > 0)) throw std::invalid_argument("place_levels: a group weight is not positive");
+  struct Order {
+    int lo, hi;
+    double lambda, inv_mass;
+  };
+  std::vector<Order> orders;
+  for (int lo = 0; lo < nG; ++lo)
+    for (int hi : acc.up[lo]) orders.push_back({lo, hi, 0.0, 1.0 / (1.0 / weight[lo] + 1.0 / weight[hi])});
+  // x = t + W^-1 A^T λ; each step raises one multiplier by the amount that makes its order hold exactly
+  // (or lowers it towards 0 where the order holds with room), which keeps λ >= 0: dual coordinate ascent.
+  std::vector<double> x = target;
+  for (int sweep = 0; sweep < max_sweeps && !orders.empty(); ++sweep) {
+    double change = 0;
+    for (Order& o : orders) {
+      const double violation = 1.0 - (x[o.hi] - x[o.lo]);
+      const double lambda = std::max(0.0, o.lambda + violation * o.inv_mass);
+      const double d = lambda - o.lambda;
+      if (d == 0) continue;
+      o.lambda = lambda;
+      x[o.hi] += d / weight[o.hi];
+      x[o.lo] -= d / weight[o.lo];
+      change = std::max(change, std::abs(d) * (1.0 / weight[o.hi] + 1.0 / weight[o.lo]));
+    }
+    if (change < 1e-10) break;
+  }
+  std::vector<long> k(nG);
+  for (int g = 0; g < nG; ++g) k[g] = std::lround(x[g]);
+  push_levels(acc, k);  // safeguard, when the ascent stopped at its sweep cap
+  return k;
+}
+
+void push_levels(const OrderAcceptance& acc, std::vector<long>& k) {
+  const int nG = int(acc.up.size());
+  if (int(k.size()) != nG)
+    throw std::invalid_argument("push_levels: " + std::to_string(nG) + " groups, " + std::to_string(k.size()) + " levels");
+  std::vector<int> indeg(nG, 0), queue;
+  for (int g = 0; g < nG; ++g)
+    for (int y : acc.up[g]) ++indeg[y];
+  for (int g = 0; g < nG; ++g)
+    if (indeg[g] == 0) queue.push_back(g);
+  for (size_t head = 0; head < queue.size(); ++head) {
+    const int g = queue[head];
+    for (int y : acc.up[g]) {
+      k[y] = std::max(k[y], k[g] + 1);
+      if (--indeg[y] == 0) queue.push_back(y);
+    }
+  }
+  if (int(queue.size()) != nG) throw std::invalid_argument("push_levels: the accepted orders contain a cycle");
 }
 
 std::vector<int> order_cycle(const OrderAcceptance& acc, const OrderedPair& o) {

@@ -83,6 +83,8 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
                        " vertices, the input " + std::to_string(nV) + ": they must share connectivity");
   if (p.final_solve != "mvc_laplace" && p.final_solve != "poisson")
     throw ConfigError("final_solve = \"" + p.final_solve + "\" is not one of: mvc_laplace, poisson");
+  if (p.level_placement != "balanced" && p.level_placement != "push_up")
+    throw ConfigError("level_placement = \"" + p.level_placement + "\" is not one of: balanced, push_up");
   const int nC = int(seg.charts.size());
   if (seg.chart.size() != seg.F.rows()) throw InvalidInput(input.source + ": segmentation has no chart per triangle");
   for (Eigen::Index f = 0; f < seg.F.rows(); ++f) {
@@ -265,24 +267,19 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
     for (auto& o : ordered)
       if (o.sign * (c[o.q] - c[o.p]) <= 0) ++st.flipped_chart_orders;
     // The ordered pairs as a graph "lower -> upper". Pairs are taken by decreasing evidence and one that
-    // would close a cycle (contradicting stronger evidence) is dropped; then every chart is pushed up to
-    // at least one h above each chart below it, in topological order (longest path from the rounded values).
-    // The previous per-pair nudging could undo itself on conflicting pairs and leave orders swapped.
+    // would close a cycle (contradicting stronger evidence) is dropped; then the levels: the balanced
+    // placement (chart_order.h), or every chart pushed up to at least one h above each chart below it, in
+    // topological order (longest path from the rounded values). The per-pair nudging before both could
+    // undo itself on conflicting pairs and leave orders swapped.
     {
       const OrderAcceptance acc = accept_orders(ordered, nG);
       st.order_constraints_dropped += int(acc.dropped.size());
-      std::vector<int> indeg(nG, 0);
-      for (int g = 0; g < nG; ++g)
-        for (int x : acc.up[g]) ++indeg[x];
-      std::vector<int> queue;
-      for (int g = 0; g < nG; ++g)
-        if (indeg[g] == 0) queue.push_back(g);
-      for (size_t head = 0; head < queue.size(); ++head) {
-        int x = queue[head];
-        for (int y : acc.up[x]) {
-          k[y] = std::max(k[y], k[x] + 1);
-          if (--indeg[y] == 0) queue.push_back(y);
-        }
+      if (p.level_placement == "balanced") {
+        std::vector<double> target(nG), weight(nG);
+        for (int g = 0; g < nG; ++g) target[g] = c[g] / h, weight[g] = double(group_size[g]);
+        k = place_levels(acc, target, weight);
+      } else {
+        push_levels(acc, k);
       }
     }
     for (auto& o : ordered)

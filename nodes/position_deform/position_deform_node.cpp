@@ -17,6 +17,8 @@ const bool registered = register_node(make_node<P>(
         .add("distance_weight", &P::distance_weight, "scale of the same-axis chart distance constraints (0 = off)", 0.0, 1e6)
         .add_choice("final_solve", &P::final_solve, {"mvc_laplace", "poisson"},
                     "final solve with pinned charts: mean value Laplace (paper) or Poisson")
+        .add_choice("level_placement", &P::level_placement, {"balanced", "push_up"},
+                    "chart levels keeping the orders apart: weighted least-squares placement, or the push of each chart above those below it")
         .add("final_jacobi_iterations", &P::final_jacobi_iterations,
              "mvc_laplace: BiCGSTAB iterations with the diagonal preconditioner before the incomplete LU (0 = ILU at once, the default: see position_deform.h)", 0, 1000000)
         .add("untangle_iterations", &P::untangle_iterations, "L-BFGS iterations of the map's untangling (0 = keep the folds)", 0, 1000000)
@@ -61,7 +63,7 @@ const bool registered = register_node(make_node<P>(
       if (s.merged_same_axis_charts > 0)
         ctx.warn(std::to_string(s.merged_same_axis_charts) + " same-axis charts share a vertex and were put on one plane");
       return make_artefact(std::move(m));
-    }).with_version("3"));
+    }).with_version("4"));
 
 // --save-all writes the PolyCube map as the tet mesh at its PolyCube positions (<id>.polycube.vtk) and
 // the PolyCube surface with chart ids and labels as cell data (<id>.polycube_surface.vtk).

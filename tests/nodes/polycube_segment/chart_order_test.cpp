@@ -3,6 +3,9 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstdint>
+#include <numeric>
+#include <stdexcept>
 
 #include "nodes/polycube_segment/chart_order.h"
 #include "nodes/polycube_segment/polycube_segment.h"
@@ -65,6 +68,74 @@ TEST_CASE("accept_orders drops the weakest pair of a cycle and order_cycle names
   SECTION("without the contradicting pair nothing is dropped") {
     pairs.erase(pairs.begin() + 2);
     CHECK(accept_orders(pairs, 4).dropped.empty());
+  }
+}
+
+namespace {
+/// Accepted orders from a list of "lower < upper" pairs (all with the same evidence, none dropped).
+OrderAcceptance chain_orders(const std::vector<std::pair<int, int>>& below, int groups) {
+  std::vector<OrderedPair> pairs;
+  for (auto [lo, hi] : below) pairs.push_back({lo, hi, 1, 1.0});
+  OrderAcceptance acc = accept_orders(pairs, groups);
+  REQUIRE(acc.dropped.empty());
+  return acc;
+}
+}  // namespace
+
+TEST_CASE("place_levels keeps every order one level apart and moves the groups least", "[chart-order]") {
+  SECTION("a stack of five equal groups at one level spreads both ways, not only up") {
+    OrderAcceptance acc = chain_orders({{0, 1}, {1, 2}, {2, 3}, {3, 4}}, 5);
+    std::vector<long> k = place_levels(acc, {0.1, 0.1, 0.1, 0.1, 0.1}, {1, 1, 1, 1, 1});
+    CHECK(k == std::vector<long>{-2, -1, 0, 1, 2});  // the push alone gives 0..4: a shift of 4
+  }
+  SECTION("a heavy group stays where it is and the light ones below it make room") {
+    // three light groups (weight 1) below a heavy one (1000), all at level 0
+    OrderAcceptance acc = chain_orders({{0, 1}, {1, 2}, {2, 3}}, 4);
+    std::vector<long> k = place_levels(acc, {0, 0, 0, 0}, {1, 1, 1, 1000});
+    CHECK(k == std::vector<long>{-3, -2, -1, 0});
+  }
+  SECTION("two groups: the weighted least-squares answer, rounded") {
+    // x = t + (-λ/3, λ) with x_1 - x_0 = 1: λ = 0.6, x = (-0.2, 0.8)
+    OrderAcceptance acc = chain_orders({{0, 1}}, 2);
+    CHECK(place_levels(acc, {0.0, 0.2}, {3, 1}) == std::vector<long>{0, 1});
+    // the other way round, the light group is the lower one: x = (-0.6, 0.4) -> (-1, 0)
+    CHECK(place_levels(acc, {0.0, 0.2}, {1, 3}) == std::vector<long>{-1, 0});
+  }
+  SECTION("orders that hold with room leave the plain rounding") {
+    OrderAcceptance acc = chain_orders({{0, 1}, {1, 2}}, 3);
+    CHECK(place_levels(acc, {0.3, 2.4, 5.6}, {1, 1, 1}) == std::vector<long>{0, 2, 6});
+  }
+  SECTION("random acyclic orders all hold, and no group moves further than the push would move one") {
+    std::uint32_t seed = 12345;
+    auto rnd = [&] { return (seed = seed * 1664525u + 1013904223u) / 4294967296.0; };
+    for (int trial = 0; trial < 20; ++trial) {
+      const int n = 12;
+      std::vector<std::pair<int, int>> below;
+      for (int i = 0; i < n; ++i)
+        for (int j = i + 1; j < n; ++j)
+          if (rnd() < 0.25) below.push_back({i, j});  // i < j: acyclic
+      OrderAcceptance acc = chain_orders(below, n);
+      std::vector<double> t(n), w(n);
+      for (int g = 0; g < n; ++g) t[g] = 4 * rnd(), w[g] = 1 + 99 * rnd();
+      std::vector<long> k = place_levels(acc, t, w);
+      for (auto [lo, hi] : below) CHECK(k[hi] >= k[lo] + 1);
+      // the push from the rounded targets (the old placement)
+      std::vector<long> push(n);
+      for (int g = 0; g < n; ++g) push[g] = std::lround(t[g]);
+      for (int g = 0; g < n; ++g)  // groups are in topological order
+        for (int hi : acc.up[g]) push[hi] = std::max(push[hi], push[g] + 1);
+      double cost = 0, cost_push = 0;
+      for (int g = 0; g < n; ++g) cost += w[g] * (k[g] - t[g]) * (k[g] - t[g]), cost_push += w[g] * (push[g] - t[g]) * (push[g] - t[g]);
+      CHECK(cost <= cost_push + 1e-9 + 0.25 * std::accumulate(w.begin(), w.end(), 0.0));  // up to the rounding's share
+    }
+  }
+  SECTION("a cycle, mismatched sizes and a weight that is not positive are refused") {
+    OrderAcceptance cyc;
+    cyc.up = {{1}, {0}};
+    CHECK_THROWS_AS(place_levels(cyc, {0, 0}, {1, 1}), std::invalid_argument);
+    OrderAcceptance acc = chain_orders({{0, 1}}, 2);
+    CHECK_THROWS_AS(place_levels(acc, {0}, {1, 1}), std::invalid_argument);
+    CHECK_THROWS_AS(place_levels(acc, {0, 0}, {1, 0}), std::invalid_argument);
   }
 }
 
