@@ -76,6 +76,7 @@ struct PolyCubeSegmentation {
   int splits_island = 0;                ///< cuts of ring charts from the boundary of a chart they enclose (extension)
   int repaired_corners = 0;             ///< vertices relabelled to resolve 4-valent corners / opposite touches (extension)
   int removed_small = 0;                ///< small charts removed during clean-up
+  int removed_narrow = 0;               ///< charts narrower than min_chart_extent hex edges removed from a valid structure (extension)
   int smoothing_iterations = 0;         ///< normal smoothing passes the labelling used (may differ after a fallback)
   bool valid = false;                   ///< every validity check of §5.1 passed
   std::vector<std::string> problems;    ///< one line per failed check, naming the charts

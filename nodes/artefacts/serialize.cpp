@@ -182,7 +182,7 @@ void write_segmentation(Writer& w, const PolyCubeSegmentation& s) {
     w.vec(c.charts);
   }
   for (int v : {s.splits_multi_orientation, s.splits_wedge, s.splits_ramp, s.splits_order_cycle, s.order_cycles,
-                s.splits_island, s.repaired_corners, s.removed_small, s.smoothing_iterations})
+                s.splits_island, s.repaired_corners, s.removed_small, s.removed_narrow, s.smoothing_iterations})
     w.pod(std::int32_t(v));
   w.flag(s.valid);
   w.vec(s.problems);
@@ -223,7 +223,7 @@ PolyCubeSegmentation read_segmentation(Reader& r) {
     c.charts = r.vec<int>();
   }
   for (int* v : {&s.splits_multi_orientation, &s.splits_wedge, &s.splits_ramp, &s.splits_order_cycle, &s.order_cycles,
-                 &s.splits_island, &s.repaired_corners, &s.removed_small, &s.smoothing_iterations})
+                 &s.splits_island, &s.repaired_corners, &s.removed_small, &s.removed_narrow, &s.smoothing_iterations})
     *v = r.pod<std::int32_t>();
   s.valid = r.flag();
   s.problems = r.vec<std::string>();

@@ -37,6 +37,14 @@
 ///   (17,171 -> 17,092); all other shared models have none. But the hex meshes did not follow: twist 0 ->
 ///   3 inverted hexes (padding hexes whose outer quad folds across the bar's sharp edge; at tet edge
 ///   0.019 / 0.021 it is 4 -> 0 and 1 -> 0), femur's minimum 0.191 -> 0.054.
+/// - narrow charts (min_chart_extent, narrow_chart_faces): a chart narrower than a hex edge along an axis
+///   of its plane is likely to collapse when the map rounds the charts around it onto one plane (for
+///   extent e hex edges, with probability about 1 - e), leaving its triangles and the volume under them
+///   squeezed flat; femur kept 18 charts with no area left in the PolyCube, all below 3 hex faces. On a
+///   valid structure such charts smaller than narrow_chart_faces hex faces are removed (remove_narrow_charts
+///   in the .cpp: one at a time, else all at once with the repairs, kept only when valid). Longer strips are
+///   left: they are the splits' separating charts or real thin features (fertility's two strips 0.9 hex edges
+///   wide, 9-13 hex faces: removing them lowered its minimum scaled Jacobian in both map variants).
 /// - small same-axis charts (with final_cleanup): a small chart beside a chart of its own axis is
 ///   spurious; if the structure is still invalid, it is removed by flood fill before the two repairs
 ///   above and the better result kept (carter at edge 0.04). The repairs can themselves leave small
@@ -72,6 +80,9 @@ struct PolyCubeSegmentParams {
   bool final_cleanup = true;           ///< after the splits, remove small charts with < 4 neighbours by flood fill (extension of §5.1)
   bool split_islands = true;           ///< cut a ring chart from the boundary of a chart with < 4 neighbours it encloses (extension of §5.1)
   bool repair_corners = true;          ///< relabel a small patch at a 4-valent corner / opposite-direction touch point (extension of §5.1)
+  double min_chart_extent = 1.0;       ///< on a valid structure, remove charts narrower than this many hex edges ...
+  double narrow_chart_faces = 4.0;     ///< ... and smaller than this many hex faces (h²) where it stays valid (extension of §5.1,
+                                       ///< below); either 0 = off, [0, 100] each
   int fallback_retries = 2;            ///< if invalid, retry with doubled smoothing this many times (reported as a warning)
   bool allow_invalid = false;          ///< pass an invalid structure on with a warning instead of failing
   bool save_surface = false;           ///< write <id>.charts.vtk (also written with --save-all)

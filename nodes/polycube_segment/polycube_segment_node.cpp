@@ -20,6 +20,7 @@ json segmentation_metrics(const PolyCubeSegmentation& s) {
   m["splits_island"] = s.splits_island;
   m["repaired_corners"] = s.repaired_corners;
   m["removed_small"] = s.removed_small;
+  m["removed_narrow"] = s.removed_narrow;
   m["valid"] = s.valid;
   m["failing_charts"] = s.failing_charts;
   m["problems"] = s.problems;
@@ -52,6 +53,9 @@ const bool registered = register_node(make_node<P>(
         .add("final_cleanup", &P::final_cleanup, "after the splits, remove small charts with < 4 neighbours")
         .add("split_islands", &P::split_islands, "cut ring charts from the boundary of a chart with < 4 neighbours")
         .add("repair_corners", &P::repair_corners, "relabel a patch at 4-valent corners / opposite touch points")
+        .add("min_chart_extent", &P::min_chart_extent,
+             "on a valid structure, remove charts narrower than this many hex edges ... (0 = off)", 0, 100)
+        .add("narrow_chart_faces", &P::narrow_chart_faces, "... and smaller than this many hex faces, where it stays valid (0 = off)", 0, 100)
         .add("fallback_retries", &P::fallback_retries, "retries with doubled smoothing when invalid", 0, 10)
         .add("allow_invalid", &P::allow_invalid, "pass an invalid structure on with a warning")
         .add("save_surface", &P::save_surface, "write <id>.charts.vtk"),
@@ -68,7 +72,7 @@ const bool registered = register_node(make_node<P>(
                  json(s.failing_charts).dump() + ")");
       }
       return make_artefact(std::make_shared<const PolyCubeSegmentation>(std::move(s)));
-    }).with_version("5"));
+    }).with_version("6"));
 
 }  // namespace
 }  // namespace polyhex

@@ -61,6 +61,7 @@ PolyCubeSegmentation segmentation() {
   s.splits_island = 3;
   s.repaired_corners = 4;
   s.removed_small = 5;
+  s.removed_narrow = 6;
   s.smoothing_iterations = 6;
   s.valid = true;
   s.problems = {"chart 0: too few neighbours", ""};
@@ -103,6 +104,7 @@ void check_equal(const PolyCubeSegmentation& a, const PolyCubeSegmentation& b) {
   CHECK(a.splits_island == b.splits_island);
   CHECK(a.repaired_corners == b.repaired_corners);
   CHECK(a.removed_small == b.removed_small);
+  CHECK(a.removed_narrow == b.removed_narrow);
   CHECK(a.smoothing_iterations == b.smoothing_iterations);
   CHECK(a.valid == b.valid);
   CHECK(a.problems == b.problems);

@@ -283,6 +283,41 @@ TEST_CASE("ramp: a bar whose top and bottom climb 1 over its length 4 is cut int
   }
 }
 
+TEST_CASE("narrow charts: a step lower than the lattice resolves is removed, a real one stays", "[segment]") {
+  // [0,2]x[0,1]x[0,1] in cells of 0.1, plus a top layer over x < 1 whose thickness is `step`: a step
+  // on the top face. h = 1 % of the diagonal (~0.0245); the riser runs the box's width (41 h), so at
+  // step 0.01 its area is about 17 hex faces: a removal candidate only with narrow_chart_faces above that.
+  auto stepped_box = [](double step) {
+    return voxel_tets({20, 10, 11}, 0.1, [](int i, int, int k) { return !(i >= 10 && k == 10); },
+                      [step](const Point& q) { return Point(q.x(), q.y(), q.z() <= 1.0 + 1e-9 ? q.z() : 1.0 + step * (q.z() - 1.0) / 0.1); });
+  };
+  PolyCubeSegmentParams p;
+  p.fallback_retries = 0;
+  SECTION("0.4 h: the riser goes, the two top pieces become one chart") {
+    TetMesh m = stepped_box(0.01);
+    p.min_chart_extent = 0;
+    PolyCubeSegmentation kept = segment_polycube(m, p);
+    REQUIRE(kept.valid);
+    CHECK(kept.removed_narrow == 0);
+    CHECK(chart_labels(kept) == std::multiset<int>{0, 0, 1, 2, 3, 4, 4, 5});  // the riser is a second +X chart
+    p.min_chart_extent = 1.0;
+    CHECK(segment_polycube(m, p).removed_narrow == 0);  // the default narrow_chart_faces (4): a long strip stays
+    p.narrow_chart_faces = 20;
+    PolyCubeSegmentation s = segment_polycube(m, p);
+    CHECK(s.valid);
+    CHECK(s.removed_narrow == 1);
+    CHECK(chart_labels(s) == std::multiset<int>{0, 1, 2, 3, 4, 5});
+    for (auto& c : s.charts) CHECK(c.neighbours.size() == 4);
+  }
+  SECTION("3 h: a step the lattice resolves is left alone") {
+    p.narrow_chart_faces = 100;
+    PolyCubeSegmentation s = segment_polycube(stepped_box(0.075), p);
+    CHECK(s.valid);
+    CHECK(s.removed_narrow == 0);
+    CHECK(chart_labels(s) == std::multiset<int>{0, 0, 1, 2, 3, 4, 4, 5});
+  }
+}
+
 TEST_CASE("hand-made invalid labelling is reported naming the charts", "[segment]") {
   TetMesh box = box_tets(1, 1, 1, 3);
   RowMatrixX3i F = boundary_triangles(box);
