@@ -43,8 +43,8 @@ PipelineConfig parse_config(const json& j, const std::string& source) {
   cfg.source = source;
   if (!j.is_object()) throw ConfigError(source + ": a config is a JSON object with a `nodes` array");
   for (auto it = j.begin(); it != j.end(); ++it)
-    if (it.key() != "nodes" && it.key() != "description" && it.key() != "sweep")
-      throw ConfigError(source + ": unknown top-level key `" + it.key() + "`; valid keys: nodes, description, sweep");
+    if (it.key() != "nodes" && it.key() != "description" && it.key() != "sweep" && it.key() != "retry")
+      throw ConfigError(source + ": unknown top-level key `" + it.key() + "`; valid keys: nodes, description, sweep, retry");
   if (!j.contains("nodes") || !j["nodes"].is_array() || j["nodes"].empty())
     throw ConfigError(source + ": `nodes` must be a non-empty array");
   std::set<std::string> ids;

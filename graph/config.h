@@ -35,6 +35,8 @@ json substitute_vars(const json& j, const std::map<std::string, std::string>& va
 
 /// Checks the structure of a config (top-level object with a `nodes` array, each node an object with
 /// string `id` and `type`, optional object `params`, object-or-array `inputs`, no other keys, unique ids).
+/// The optional top-level `description`, `sweep` (tools/sweep.cpp) and `retry` (runtime/cli_run.h) are
+/// checked by their users.
 /// \throw ConfigError naming the source and the node.
 PipelineConfig parse_config(const json& j, const std::string& source);
 

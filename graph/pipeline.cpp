@@ -323,6 +323,7 @@ json RunResult::report() const {
     nodes_json[n.id] = j;
   }
   r["nodes"] = nodes_json;
+  if (!retry.is_null()) r["retry"] = retry;
   return r;
 }
 

@@ -58,7 +58,8 @@ struct RunResult {
   double seconds = 0;
   std::string error;              ///< empty when the run succeeded
   bool interrupted = false;       ///< stopped by SIGINT/SIGTERM (error says where)
-  /// report.json: {polyhex_version, status, error?, seconds, nodes: {id: {type, seconds, cache_hit, metrics, warnings}}}
+  json retry;                     ///< the config's retry attempts (runtime/cli_run.h); null when it has none
+  /// report.json: {polyhex_version, status, error?, seconds, nodes: {id: {type, seconds, cache_hit, metrics, warnings}}, retry?}
   json report() const;
 };
 

@@ -1,9 +1,30 @@
 /// @file cli_run.h
 /// @brief Shared plumbing of the `polyhex run` and `polyhex bench` commands: load a config with
-/// `${input}` and `--set` overrides, build the pipeline, run it with terminal progress.
+/// `${input}` and `--set` overrides, build the pipeline, run it with terminal progress; and the config's
+/// `retry` block, which `polyhex run` follows.
+///
+/// ## The `retry` key of a config
+///
+///     "retry": {"node": "quality", "max_inverted": 0, "min_sj": 0.3,
+///               "variants": [{"polycube.level_placement": "push_up"}]}
+///
+/// A run is accepted when node `node` reports `inverted` <= max_inverted and `sj_min` >= min_sj. When
+/// the first run is not, the variants run one after the other (each: the config with its
+/// `"<id>.<param>": value` pairs set, into OUT/.retry-<k>, sharing the artefact cache so that only the
+/// nodes downstream of a changed param run again; with --no-cache a temporary cache OUT/.retry-cache
+/// serves the attempts and is removed), until one is accepted. The best attempt is kept: fewest inverted
+/// hexes, then the highest minimum scaled Jacobian (the first attempt wins a tie); its files are moved into
+/// OUT and report.json is its report with `retry`: {node, chosen (0 = the config as given), attempts:
+/// [{set, status, inverted, sj_min, seconds, accepted}]}; `seconds` is the time of all attempts.
+/// Why: the hex stage's outcome (the optimizer's minimum, whether a fold can be untangled) is sensitive to
+/// small changes of the map, so two equally sound variants of a stage each fail on some models where the
+/// other succeeds; trying the second only where the first falls short costs nothing where it does not.
+/// Every variant is checked (ids, params, ranges) before anything runs. `polyhex sweep` and `polyhex
+/// bench` run each config once and ignore the block.
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,11 +44,26 @@ struct RunRequest {
   int verbosity = 0;                 ///< 0 = progress on a terminal only, 1 = -v, 2 = -vv
 };
 
-/// Loads, substitutes, overrides and validates. \throw ConfigError
-Pipeline load_pipeline(const RunRequest& req);
+/// The parsed `retry` block of a config, with every variant's pipeline built.
+struct RetryPlan {
+  std::string node;                  ///< the node whose metrics judge a run
+  double max_inverted = 0;           ///< accepted when inverted <= this ...
+  double min_sj = 0;                 ///< ... and sj_min >= this
+  std::vector<json> variants;        ///< per variant its {"<id>.<param>": value} object
+  std::vector<Pipeline> pipelines;   ///< per variant the pipeline it runs
+};
+
+/// Loads, substitutes, overrides and validates. With `retry`, also the config's retry block (--set
+/// applies to the variants too; a variant's own values win). \throw ConfigError
+Pipeline load_pipeline(const RunRequest& req, std::optional<RetryPlan>* retry = nullptr);
 
 /// Runs the pipeline, prints progress to stderr when stderr is a terminal (or verbosity > 0),
 /// writes report.json into the output folder. Uses the artefact cache unless req.no_cache.
 RunResult run_pipeline(const Pipeline& p, const RunRequest& req);
+
+/// run_pipeline, then the retry block's variants while the best attempt is not accepted (above).
+/// \throw ConfigError when the judging node does not report `inverted` and `sj_min`
+/// \throw IOError when an attempt's files cannot be moved into the output folder
+RunResult run_with_retry(const Pipeline& p, const std::optional<RetryPlan>& retry, const RunRequest& req);
 
 }  // namespace polyhex

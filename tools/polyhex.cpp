@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 
 #include "graph/pipeline.h"
 #include "runtime/atomic_file.h"
@@ -38,8 +39,9 @@ void add_run_options(CLI::App* c, RunRequest& req) {
 }
 
 int cmd_run(const RunRequest& req) {
-  Pipeline p = load_pipeline(req);
-  RunResult r = run_pipeline(p, req);
+  std::optional<RetryPlan> retry;
+  Pipeline p = load_pipeline(req, &retry);
+  RunResult r = run_with_retry(p, retry, req);
   if (r.interrupted) {
     std::fprintf(stderr, "polyhex: interrupted: %s; no mesh written\n", r.error.c_str());
     return 130;

@@ -110,3 +110,87 @@ TEST_CASE("cli: graph prints DOT, nodes lists the registry, shapes writes a surf
   CHECK(bad.code == 1);
   CHECK_THAT(bad.out, Contains("teapot"));
 }
+
+namespace {
+
+/// baseline.json with a `retry` block.
+fs::path retry_config(const fs::path& dir, const json& retry) {
+  std::ifstream in(config("baseline.json"));
+  json j = json::parse(in);
+  j["retry"] = retry;
+  fs::path p = dir / "retry.json";
+  std::ofstream(p) << j.dump(2);
+  return p;
+}
+
+}  // namespace
+
+TEST_CASE("cli: retry runs the variants while no attempt is accepted and keeps the best", "[cli]") {
+  fs::path out = polyhex::test::fresh_dir("cli_retry");
+  SECTION("never accepted: every variant runs, the best attempt's mesh and report are kept") {
+    fs::path cfg = retry_config(out, {{"node", "quality"}, {"min_sj", 1.0},
+                                      {"variants", {{{"tets.edge_length", 0.1}}, {{"tets.edge_length", 0.12}}}}});
+    CliRun r = run_polyhex("run " + cfg.string() + " --out " + (out / "o").string() + " --set tets.edge_length=0.08 --no-cache --threads 2");
+    INFO(r.out);
+    REQUIRE(r.code == 0);
+    std::ifstream in(out / "o" / "report.json");
+    json rep = json::parse(in);
+    const json& att = rep["retry"]["attempts"];
+    REQUIRE(att.size() == 3);
+    int best = 0;
+    for (int k = 0; k < 3; ++k) {
+      CHECK(att[k]["accepted"] == false);
+      CHECK(att[k]["inverted"] == 0);
+      if (att[k]["sj_min"].get<double>() > att[best]["sj_min"].get<double>()) best = k;
+    }
+    CHECK(att[1]["set"]["tets.edge_length"] == 0.1);
+    CHECK(rep["retry"]["chosen"] == best);
+    const json& q = rep["nodes"]["quality"]["metrics"];
+    CHECK(q["sj_min"].get<double>() == att[best]["sj_min"].get<double>());
+    // the written mesh is the chosen attempt's
+    CliRun c = run_polyhex("check " + (out / "o" / "hex.vtk").string() + " --json");
+    REQUIRE(c.code == 0);
+    json cj = json::parse(c.out);
+    CHECK(cj["hexes"] == q["hexes"]);
+    CHECK(cj["sj_min"].get<double>() == Approx(q["sj_min"].get<double>()).margin(1e-12));
+    // the attempts' folders and the temporary cache are gone
+    for (auto& e : fs::directory_iterator(out / "o")) CHECK(e.path().filename().string().rfind(".retry", 0) != 0);
+    CHECK(rep["seconds"].get<double>() >= att[0]["seconds"].get<double>() + att[1]["seconds"].get<double>());
+  }
+  SECTION("with the default cache the attempts share the cache beside OUT") {
+    fs::path cfg = retry_config(out, {{"node", "quality"}, {"min_sj", 1.0}, {"variants", {{{"tets.edge_length", 0.12}}}}});
+    CliRun r = run_polyhex("run " + cfg.string() + " --out " + (out / "c").string() + " --set tets.edge_length=0.1 --threads 2");
+    INFO(r.out);
+    REQUIRE(r.code == 0);
+    CHECK(fs::exists(out / ".polyhex-cache"));
+    CHECK_FALSE(fs::exists(out / "c" / ".polyhex-cache"));
+    std::ifstream in(out / "c" / "report.json");
+    CHECK(json::parse(in)["retry"]["attempts"].size() == 2);
+  }
+  SECTION("accepted at once: no variant runs") {
+    fs::path cfg = retry_config(out, {{"node", "quality"}, {"min_sj", 0.0}, {"variants", {{{"tets.edge_length", 0.1}}}}});
+    CliRun r = run_polyhex("run " + cfg.string() + " --out " + (out / "a").string() + " --set tets.edge_length=0.1 --threads 2");
+    INFO(r.out);
+    REQUIRE(r.code == 0);
+    std::ifstream in(out / "a" / "report.json");
+    json rep = json::parse(in);
+    CHECK(rep["retry"]["attempts"].size() == 1);
+    CHECK(rep["retry"]["attempts"][0]["accepted"] == true);
+    CHECK(rep["retry"]["chosen"] == 0);
+  }
+  SECTION("a bad block is a config error naming the key, before anything runs") {
+    auto fails = [&](const json& block, const std::string& says) {
+      fs::path cfg = retry_config(out, block);
+      CliRun r = run_polyhex("run " + cfg.string() + " --out " + (out / "bad").string());
+      INFO(r.out);
+      CHECK(r.code == 2);
+      CHECK_THAT(r.out, Contains(says));
+      CHECK_FALSE(fs::exists(out / "bad" / "hex.vtk"));
+    };
+    fails({{"node", "quality"}, {"variants", {{{"tets.edge_length", 0.1}}}}, {"min_sjj", 0.3}}, "unknown key `min_sjj`");
+    fails({{"node", "nowhere"}, {"variants", {{{"tets.edge_length", 0.1}}}}}, "retry.node: no node with id `nowhere`");
+    fails({{"node", "quality"}, {"variants", {{{"tets.edge_lenght", 0.1}}}}}, "retry.variants[0]");
+    fails({{"node", "quality"}, {"variants", json::array()}}, "`variants` must be a non-empty array");
+    fails({{"node", "quality"}, {"min_sj", 2}, {"variants", {{{"tets.edge_length", 0.1}}}}}, "retry.min_sj");
+  }
+}
