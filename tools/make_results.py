@@ -80,7 +80,7 @@ def main():
         print(f"{name}: exit {code}, {wall:.1f} s", file=sys.stderr)
         if rep is None or rep.get("status") != "ok":
             err = (rep or {}).get("error", " ".join(tail))
-            rows.append(f"| {name} | failed: {err.replace('|', '/')[:160]} |" + " |" * 11)
+            rows.append(f"| {name} | failed: {err.replace('|', '/')[:160]} |" + " |" * 12)
             continue
         n = rep["nodes"]
         q = n.get("quality", {}).get("metrics", {})
@@ -88,11 +88,17 @@ def main():
         align = m("rotate", "alignment")
         paper = PAPER.get(name)
         best = BEST.get(name)
-        rows.append("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |".format(
+        retry = rep.get("retry")
+        attempts = "1"
+        if retry:
+            each = [fmt(a.get("sj_min")) + (f" ({int(a['inverted'])} inv.)" if a.get("inverted") else "")
+                    for a in retry["attempts"]]
+            attempts = " / ".join(each) + ("" if len(each) == 1 else f"; kept {retry['chosen'] + 1}")
+        rows.append("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |".format(
             name, m("tets", "tets"), m("segment", "charts"), q.get("hexes"), q.get("inverted"),
             fmt(q.get("sj_min")), fmt(q.get("sj_avg")), fmt(q.get("irregular_pct"), ".1f"),
             fmt(q.get("hausdorff_mean", 0) * 1e3, ".2f") + " / " + fmt(q.get("hausdorff_max", 0) * 1e3, ".1f"),
-            f"{rep['seconds']:.1f}",
+            f"{rep['seconds']:.1f}", attempts,
             "–" if paper is None else f"{paper[2]:.3f} / {paper[1]:.3f}",
             "–" if best is None else f"{best[1]:.3f} / {best[2]:.3f} ({best[0]})"))
         stage_rows.append("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |".format(
@@ -117,9 +123,10 @@ def main():
            "Hex quality as `../shared/tools/hexcheck.py` defines it (Verdict scaled Jacobian with centre term; irregular ="
            " interior edge valence != 6 or boundary vertex with != 4 boundary quads; Hausdorff relative to the input's bbox"
            " diagonal, in 1e-3). `paper` is the 2011 paper's Table 1 (min / avg SJ), `best` the best published PolyCube mesh"
-           " listed in `../shared/data/README.md` (min / avg SJ).", "",
-           "| model | tets | charts | hexes | inverted | SJ min | SJ avg | irregular % | Hausdorff mean / max (1e-3) | time s | paper min / avg | best min / avg |",
-           "|---|---|---|---|---|---|---|---|---|---|---|---|"] + rows + [
+           " listed in `../shared/data/README.md` (min / avg SJ). `attempts`: the SJ min of each attempt of the config's"
+           " `retry` block (runtime/cli_run.h) and the one kept; `time s` is the time of all attempts.", "",
+           "| model | tets | charts | hexes | inverted | SJ min | SJ avg | irregular % | Hausdorff mean / max (1e-3) | time s | attempts | paper min / avg | best min / avg |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|"] + rows + [
            "", "## PolyCube stages", "",
            "| model | alignment after §4 | charts | corners | splits (multi-orientation / wedge / ramp / order cycle) | inverted tets of the map: final solve -> untangled (flat: 4 vertices on a plane or 3 on an edge) | map distortion (median) | chart pairs out of order | planarity error | seconds per stage |",
            "|---|---|---|---|---|---|---|---|---|---|"] + stage_rows + [
