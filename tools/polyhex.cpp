@@ -43,7 +43,8 @@ int cmd_run(const RunRequest& req) {
   Pipeline p = load_pipeline(req, &retry);
   RunResult r = run_with_retry(p, retry, req);
   if (r.interrupted) {
-    std::fprintf(stderr, "polyhex: interrupted: %s; no mesh written\n", r.error.c_str());
+    std::fprintf(stderr, "polyhex: interrupted: %s; %s\n", r.error.c_str(),
+                 r.retry.is_null() ? "no mesh written" : "the first attempt's files stay in the output folder");
     return 130;
   }
   if (!r.error.empty()) {

@@ -1207,14 +1207,6 @@ void repair(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSeg
   }
 }
 
-/// Extension of §5.1 (param min_chart_extent): a chart whose vertices span less than min_chart_extent
-/// hex edges along one of the two axes of its plane is narrower than the lattice resolves: rounding puts
-/// the charts on either side on one plane, the chart collapses to a line or a point, and the map squeezes
-/// its triangles and the volume under them (femur: 18 of 93 charts with no area left, most of them
-/// 1-ring patches of the corner repair or remnants of the clean-up, 0.05-0.9 hex edges wide; 17,171
-/// inverted tets). On a valid structure, such charts are removed one at a time, smallest first, by flood
-/// fill from their neighbours, each kept only if the structure stays valid; separating charts the splits
-/// inserted (width h by design) are left alone. Up to 4 rounds, as a removal can make a neighbour narrow.
 struct NarrowCharts {
   std::vector<std::pair<double, int>> charts;  // (area, chart), smallest first
   std::vector<std::vector<int>> tris;          // triangles of every chart
