@@ -103,21 +103,20 @@ void move_files(const fs::path& from, const fs::path& to) {
 
 }  // namespace
 
+std::optional<RetryPlan> retry_plan(const json& config, const Pipeline& pipeline, const std::string& source) {
+  if (!config.is_object() || !config.contains("retry")) return std::nullopt;
+  json j = config;
+  j.erase("retry");
+  return parse_retry(config["retry"], j, pipeline, source);
+}
+
 Pipeline load_pipeline(const RunRequest& req, std::optional<RetryPlan>* retry) {
   std::map<std::string, std::string> vars;
   if (!req.input.empty()) vars["input"] = req.input;
   json j = load_config_json(req.config, vars);
   for (const std::string& s : req.sets) apply_override(j, s);
-  json block;
-  if (j.is_object() && j.contains("retry")) {
-    block = j["retry"];
-    j.erase("retry");
-  }
   Pipeline p = Pipeline::build(parse_config(j, req.config.string()));
-  if (retry) {
-    retry->reset();
-    if (!block.is_null()) *retry = parse_retry(block, j, p, req.config.string());
-  }
+  if (retry) *retry = retry_plan(j, p, req.config.string());
   return p;
 }
 

@@ -19,8 +19,9 @@
 /// Why: the hex stage's outcome (the optimizer's minimum, whether a fold can be untangled) is sensitive to
 /// small changes of the map, so two equally sound variants of a stage each fail on some models where the
 /// other succeeds; trying the second only where the first falls short costs nothing where it does not.
-/// Every variant is checked (ids, params, ranges) before anything runs. `polyhex sweep` and `polyhex
-/// bench` run each config once and ignore the block.
+/// Every variant is checked (ids, params, ranges) before anything runs. `polyhex sweep` follows the block
+/// in every case (the variants set on top of the case's values); `polyhex bench` ignores it (it times one
+/// pipeline).
 #pragma once
 
 #include <filesystem>
@@ -52,6 +53,11 @@ struct RetryPlan {
   std::vector<json> variants;        ///< per variant its {"<id>.<param>": value} object
   std::vector<Pipeline> pipelines;   ///< per variant the pipeline it runs
 };
+
+/// The `retry` block of `config` (none when it has none), checked against `pipeline` (built from the
+/// same config): keys, the judging node's id, ranges, and every variant's pipeline.
+/// \throw ConfigError naming `source` and the key (`retry.variants[k]: node ...`)
+std::optional<RetryPlan> retry_plan(const json& config, const Pipeline& pipeline, const std::string& source);
 
 /// Loads, substitutes, overrides and validates. With `retry`, also the config's retry block (--set
 /// applies to the variants too; a variant's own values win). \throw ConfigError

@@ -58,6 +58,7 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -107,6 +108,7 @@ struct SweepPlan {
   std::vector<std::string> keys;  ///< every swept id.param, in order of first appearance
   std::vector<SweepCase> cases;
   std::vector<Pipeline> pipelines;  ///< one per case
+  std::vector<std::optional<RetryPlan>> retries;  ///< one per case: the config's retry block on the case's config
 };
 
 std::string join(const std::vector<std::string>& v, const std::string& sep) {
@@ -321,6 +323,11 @@ SweepPlan plan_sweep(const SweepOptions& o) {
   for (size_t c = 0; c < plan.cases.size(); ++c) {
     const SweepCase& sc = plan.cases[c];
     plan.pipelines.push_back(build_case(plan.base, sc.set, plan.source, plan.source + ": sweep case `" + sc.name + "`"));
+    try {
+      plan.retries.push_back(retry_plan(case_config(plan.base, sc.set), plan.pipelines.back(), plan.source));
+    } catch (const ConfigError& e) {
+      throw ConfigError(plan.source + ": sweep case `" + sc.name + "`: " + strip_source(e.what(), plan.source));
+    }
     for (const std::string& k : computation_keys(plan.pipelines.back())) {
       if (k.empty()) continue;
       auto [it, inserted] = first_with.emplace(k, int(c));
@@ -364,7 +371,7 @@ int run_one_case(const SweepOptions& o) {
   json cfg = case_config(plan.base, plan.cases[c].set);
   cfg["description"] = "sweep case `" + o.only_case + "` of " + plan.source;
   write_file_atomic(req.out_dir / "config.json", [&](std::ostream& out) { out << cfg.dump(2) << "\n"; });
-  RunResult r = run_pipeline(plan.pipelines[c], req);
+  RunResult r = run_with_retry(plan.pipelines[c], plan.retries[c], req);
   if (!r.error.empty()) std::fprintf(stderr, "polyhex: %s: %s\n", r.interrupted ? "interrupted" : "error", r.error.c_str());
   return r.interrupted ? 130 : r.error.empty() ? 0 : 1;
 }

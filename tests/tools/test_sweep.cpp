@@ -71,13 +71,14 @@ size_t column(const std::vector<std::string>& header, const std::string& name) {
 const std::string kCube = std::string(POLYHEX_SOURCE_DIR) + "/tests/fixtures/io/cube.off";
 
 // Writes a sweep config on the split baseline of the cube (each case a fraction of a second).
-fs::path baseline_sweep(const fs::path& dir, const json& sweep_value) {
+fs::path baseline_sweep(const fs::path& dir, const json& sweep_value, const json& retry = nullptr) {
   json cfg = {{"sweep", sweep_value},
               {"nodes",
                {{{"id", "surface"}, {"type", "read_surface"}, {"params", {{"path", kCube}}}},
                 {{"id", "tets"}, {"type", "tetrahedralize/tetgen"}, {"params", {{"edge_length", 0.12}}}, {"inputs", {{"surface", "surface"}}}},
                 {{"id", "hex"}, {"type", "hex_from_tets/split"}, {"inputs", {{"tets", "tets"}}}},
                 {{"id", "quality"}, {"type", "quality"}, {"params", {{"samples", 2000}}}, {"inputs", {{"mesh", "hex"}, {"surface", "surface"}}}}}}};
+  if (!retry.is_null()) cfg["retry"] = retry;
   const fs::path p = dir / "sweep.config.json";
   std::ofstream(p) << cfg.dump(2);
   return p;
@@ -362,4 +363,32 @@ TEST_CASE("sweep: SIGTERM stops the running cases at a safe point, starts no mor
     CHECK_FALSE(fs::exists(out / s["cases"][c]["name"].get<std::string>()));
   }
   CHECK_THAT(err, Contains("interrupted; 6 cases: 1 interrupted, 5 not_run"));
+}
+
+TEST_CASE("sweep: every case follows the config's retry block, on top of its own values", "[sweep]") {
+  const fs::path dir = scratch("retry"), out = dir / "out";
+  // never accepted: each case runs its own config, then the variant (quality sampled differently)
+  const json retry = {{"node", "quality"}, {"min_sj", 1.0}, {"variants", {{{"quality.samples", 1000}}}}};
+  const fs::path cfg = baseline_sweep(dir, {{"tets.edge_length", {0.12, 0.2}}}, retry);
+  CliRun r = sweep(cfg.string() + " --out " + out.string() + " --jobs 1 --threads 2", dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const json s = json::parse(read_text(out / "sweep.json"));
+  REQUIRE(s["cases"].size() == 2);
+  int hexes[2];
+  for (int c = 0; c < 2; ++c) {
+    const std::string name = s["cases"][c]["name"].get<std::string>();
+    const json rep = json::parse(read_text(out / name / "report.json"));
+    REQUIRE(rep["retry"]["attempts"].size() == 2);
+    CHECK(rep["retry"]["attempts"][1]["set"]["quality.samples"] == 1000);
+    hexes[c] = rep["nodes"]["quality"]["metrics"]["hexes"].get<int>();
+    for (auto& e : fs::directory_iterator(out / name)) CHECK(e.path().filename().string().rfind(".retry", 0) != 0);
+  }
+  CHECK(hexes[0] > hexes[1]);  // each case kept its own tet edge (0.12 vs 0.2) through the retry
+  // a bad variant is refused before anything runs, naming the case
+  const fs::path bad = baseline_sweep(dir, {{"tets.edge_length", {0.12}}},
+                                      {{"node", "quality"}, {"variants", {{{"quality.sampels", 1}}}}});
+  CliRun b = sweep(bad.string() + " --out " + (dir / "bad").string(), dir);
+  CHECK(b.code == 2);
+  CHECK_THAT(b.err, Contains("retry.variants[0]") && Contains("sampels"));
 }
