@@ -110,6 +110,14 @@ void apply_override(json& config, const std::string& assignment) {
   } catch (const json::parse_error&) {
     value = text;
   }
+  try {
+    set_param(config, id, param, value);
+  } catch (const ConfigError& e) {
+    throw ConfigError("--set " + assignment + ": " + e.what());
+  }
+}
+
+void set_param(json& config, const std::string& id, const std::string& param, const json& value) {
   std::string ids;
   if (config.is_object() && config.contains("nodes") && config["nodes"].is_array()) {
     for (json& n : config["nodes"]) {
@@ -122,7 +130,7 @@ void apply_override(json& config, const std::string& assignment) {
       ids += (ids.empty() ? "" : ", ") + n["id"].get<std::string>();
     }
   }
-  throw ConfigError("--set " + assignment + ": no node with id `" + id + "`; ids: " + ids);
+  throw ConfigError("no node with id `" + id + "`; ids: " + ids);
 }
 
 }  // namespace polyhex

@@ -44,6 +44,10 @@ PipelineConfig parse_config(const json& j, const std::string& source);
 /// \throw ConfigError when the file is missing or not valid JSON (with the parser's position).
 json load_config_json(const std::filesystem::path& path, const std::map<std::string, std::string>& vars);
 
+/// Sets param `param` of the node with id `id` in the config JSON to `value` (creating its `params`).
+/// \throw ConfigError "no node with id `ID`; ids: ..." when no node has that id.
+void set_param(json& config, const std::string& id, const std::string& param, const json& value);
+
 /// Applies `id.param=value` to the config JSON. The value is parsed as JSON when it parses
 /// (numbers, true/false, quoted strings), else taken as a plain string.
 /// \throw ConfigError when the syntax is wrong or no node has that id (lists the ids).

@@ -308,7 +308,7 @@ RunResult Pipeline::run(const RunOptions& opt) const {
 json RunResult::report() const {
   json r;
   r["polyhex_version"] = POLYHEX_VERSION;
-  r["status"] = error.empty() ? "ok" : interrupted ? "interrupted" : "error";
+  r["status"] = status();
   if (!error.empty()) r["error"] = error;
   r["seconds"] = seconds;
   json nodes_json = json::object();

@@ -59,6 +59,8 @@ struct RunResult {
   std::string error;              ///< empty when the run succeeded
   bool interrupted = false;       ///< stopped by SIGINT/SIGTERM (error says where)
   json retry;                     ///< the config's retry attempts (runtime/cli_run.h); null when it has none
+  /// "ok", "interrupted" or "error"
+  std::string status() const { return error.empty() ? "ok" : interrupted ? "interrupted" : "error"; }
   /// report.json: {polyhex_version, status, error?, seconds, nodes: {id: {type, seconds, cache_hit, metrics, warnings}}, retry?}
   json report() const;
 };

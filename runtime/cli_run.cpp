@@ -21,14 +21,11 @@ json variant_config(json j, const json& variant, const std::string& where) {
     const auto dot = key.find('.');
     if (dot == std::string::npos || dot == 0 || dot + 1 == key.size())
       throw ConfigError(where + ": `" + key + "` is not <id>.<param>");
-    bool found = false;
-    for (json& n : j["nodes"])
-      if (n.is_object() && n.contains("id") && n["id"] == key.substr(0, dot)) {
-        if (!n.contains("params")) n["params"] = json::object();
-        n["params"][key.substr(dot + 1)] = it.value();
-        found = true;
-      }
-    if (!found) throw ConfigError(where + ": no node with id `" + key.substr(0, dot) + "`");
+    try {
+      set_param(j, key.substr(0, dot), key.substr(dot + 1), it.value());
+    } catch (const ConfigError& e) {
+      throw ConfigError(where + ": " + e.what());
+    }
   }
   return j;
 }
@@ -171,7 +168,7 @@ RunResult run_with_retry(const Pipeline& p, const std::optional<RetryPlan>& retr
   size_t chosen = 0;
   Judgement best_j{};
   auto record = [&](const RunResult& r, const json& set, const Judgement* j) {
-    json a{{"set", set}, {"status", r.error.empty() ? "ok" : r.interrupted ? "interrupted" : "error"}, {"seconds", r.seconds}};
+    json a{{"set", set}, {"status", r.status()}, {"seconds", r.seconds}};
     if (j) {
       a["inverted"] = j->inverted;
       a["sj_min"] = j->sj_min;

@@ -148,11 +148,7 @@ json case_config(const json& base, const std::vector<std::pair<std::string, json
   json j = base;
   for (const auto& [key, value] : set) {
     const auto dot = key.find('.');
-    for (json& n : j["nodes"])
-      if (n["id"] == key.substr(0, dot)) {
-        if (!n.contains("params")) n["params"] = json::object();
-        n["params"][key.substr(dot + 1)] = value;
-      }
+    set_param(j, key.substr(0, dot), key.substr(dot + 1), value);  // keys checked by check_target
   }
   return j;
 }
@@ -372,7 +368,7 @@ int run_one_case(const SweepOptions& o) {
   cfg["description"] = "sweep case `" + o.only_case + "` of " + plan.source;
   write_file_atomic(req.out_dir / "config.json", [&](std::ostream& out) { out << cfg.dump(2) << "\n"; });
   RunResult r = run_with_retry(plan.pipelines[c], plan.retries[c], req);
-  if (!r.error.empty()) std::fprintf(stderr, "polyhex: %s: %s\n", r.interrupted ? "interrupted" : "error", r.error.c_str());
+  if (!r.error.empty()) std::fprintf(stderr, "polyhex: %s: %s\n", r.status().c_str(), r.error.c_str());
   return r.interrupted ? 130 : r.error.empty() ? 0 : 1;
 }
 

@@ -1256,10 +1256,10 @@ NarrowCharts narrow_charts(const Surface& s, const State& st, double limit, doub
 /// neighbour narrow.
 void remove_narrow_charts(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p, State& st) {
   if (p.min_chart_extent <= 0 || p.narrow_chart_faces <= 0) return;
+  if (!make_result(s, st).valid) return;  // every change below is kept only when valid
   const double h = p.hex_edge_length * s.diag, limit = p.min_chart_extent * h, max_area = p.narrow_chart_faces * h * h;
   for (int round = 0; round < 4; ++round) {
     throw_if_interrupted();
-    if (!make_result(s, st).valid) return;
     NarrowCharts n = narrow_charts(s, st, limit, max_area);
     if (n.charts.empty()) return;
     bool changed = false;
