@@ -5,6 +5,7 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -14,6 +15,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "runtime/errors.h"
 
@@ -57,26 +59,27 @@ sigset_t interrupt_set() {
 // Threads started before main() (OpenBLAS's server, log4cplus's pool under OpenVDB) do not inherit
 // the mask set in main(). Each is sent a real-time signal whose handler adds SIGINT and SIGTERM to the
 // mask the thread returns to (uc_sigmask, restored by sigreturn).
-std::atomic<int> g_blocked_threads{0};
-
 extern "C" void on_block_request(int, siginfo_t*, void* context) {
   auto* uc = static_cast<ucontext_t*>(context);
   sigaddset(&uc->uc_sigmask, SIGINT);
   sigaddset(&uc->uc_sigmask, SIGTERM);
-  g_blocked_threads.fetch_add(1);
 }
 
-/// The blocked-signal mask of thread `tid` (SigBlk in /proc/self/task/TID/status); all ones if unreadable.
-unsigned long long blocked_mask(long tid) {
+/// The blocked-signal mask of thread `tid` (SigBlk in /proc/self/task/TID/status); false if the
+/// thread is gone.
+bool blocked_mask(long tid, unsigned long long& mask) {
   const std::string path = "/proc/self/task/" + std::to_string(tid) + "/status";
-  unsigned long long mask = ~0ULL;
+  bool found = false;
   if (FILE* f = std::fopen(path.c_str(), "r")) {
     char line[256];
     while (std::fgets(line, sizeof line, f))
-      if (std::strncmp(line, "SigBlk:", 7) == 0) mask = std::strtoull(line + 7, nullptr, 16);
+      if (std::strncmp(line, "SigBlk:", 7) == 0) {
+        mask = std::strtoull(line + 7, nullptr, 16);
+        found = true;
+      }
     std::fclose(f);
   }
-  return mask;
+  return found;
 }
 
 void block_in_other_threads() {
@@ -84,31 +87,54 @@ void block_in_other_threads() {
   struct sigaction sa {}, old {};
   sa.sa_sigaction = on_block_request;
   sa.sa_flags = SA_SIGINFO | SA_RESTART;
-  sigemptyset(&sa.sa_mask);
+  // SIGINT and SIGTERM blocked while the handler runs too, so the thread's mask shows them from the
+  // moment the handler starts until sigreturn installs uc_sigmask.
+  sa.sa_mask = interrupt_set();
   if (sigaction(request, &sa, &old) != 0) return;
   const pid_t pid = ::getpid();
   const pid_t self = static_cast<pid_t>(::syscall(SYS_gettid));
-  int sent = 0;
-  if (DIR* d = ::opendir("/proc/self/task")) {
+  const auto bit = [](int sig) { return 1ULL << (sig - 1); };
+  // Kernel signal 32 (glibc's SIGCANCEL) can only be blocked by glibc itself: pthread_create blocks
+  // every signal around clone() and the new thread sets its real mask a moment later. A library that
+  // starts threads in a constructor does not wait for that, so a thread seen in that state is polled
+  // again rather than taken as "blocks everything" (it then unblocked SIGTERM and took the signal).
+  const unsigned long long starting = 1ULL << 31;
+  std::vector<long> asked;
+  bool settled = false;
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!settled && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(1)) {
+    settled = true;
+    DIR* d = ::opendir("/proc/self/task");
+    if (!d) break;
     while (dirent* e = ::readdir(d)) {
       const long tid = std::strtol(e->d_name, nullptr, 10);
-      if (tid <= 0 || tid == self) continue;
-      // Threads that block SIGINT and SIGTERM already (log4cplus blocks every signal in its threads)
-      // need nothing; a thread that blocks the request signal cannot be asked.
-      const unsigned long long mask = blocked_mask(tid);
-      const auto bit = [](int sig) { return 1ULL << (sig - 1); };
+      unsigned long long mask = 0;
+      if (tid <= 0 || tid == self || !blocked_mask(tid, mask)) continue;
+      if (mask & starting) {
+        settled = false;
+        continue;
+      }
+      // Threads that block SIGINT and SIGTERM (log4cplus blocks every signal in its threads, and an
+      // asked thread once its handler starts) need nothing; one that blocks the request cannot be asked.
       if ((mask & bit(SIGINT)) && (mask & bit(SIGTERM))) continue;
       if (mask & bit(request)) continue;
-      if (::syscall(SYS_tgkill, pid, static_cast<pid_t>(tid), request) == 0) ++sent;
+      settled = false;
+      if (std::find(asked.begin(), asked.end(), tid) != asked.end()) continue;
+      if (::syscall(SYS_tgkill, pid, static_cast<pid_t>(tid), request) == 0) asked.push_back(tid);
     }
     ::closedir(d);
+    if (!settled) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
-  // Wait (briefly) until every thread has run the handler; a thread that never does keeps the plain
-  // handler, as before.
-  const auto t0 = std::chrono::steady_clock::now();
-  while (g_blocked_threads.load() < sent && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(1))
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  sigaction(request, &old, nullptr);
+  // A thread that never ran the handler keeps the plain handler, as before; its request is then
+  // ignored rather than left to the default action (which would end the process).
+  if (settled) {
+    sigaction(request, &old, nullptr);
+  } else {
+    struct sigaction ignore {};
+    ignore.sa_handler = SIG_IGN;
+    sigemptyset(&ignore.sa_mask);
+    sigaction(request, &ignore, nullptr);
+  }
 }
 
 void watch() {
