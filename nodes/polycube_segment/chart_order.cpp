@@ -103,20 +103,25 @@ AxisChartOrder chart_order_evidence(const RowMatrixX3d& V, const TetEdgeGraph& g
       if (du < dist[u]) dist[u] = du, src[u] = src[v], pq.push({du, u});
     }
   }
-  std::map<std::pair<int, int>, std::pair<double, int>> samples;  // (p<q) -> (sum δ, count)
+  struct Sums {
+    double at_p = 0, at_q = 0;
+    int count = 0;
+  };
+  std::map<std::pair<int, int>, Sums> samples;  // (p<q) -> sums of the closest vertices' coordinates
   for (auto& [i, j] : graph.edges) {
     if (src[i] < 0 || src[j] < 0) continue;
     int gi = vgroup[src[i]], gj = vgroup[src[j]];
     if (gi == gj) continue;
-    double delta = V(src[j], a) - V(src[i], a);
-    if (gi > gj) std::swap(gi, gj), delta = -delta;
+    double zi = V(src[i], a), zj = V(src[j], a);
+    if (gi > gj) std::swap(gi, gj), std::swap(zi, zj);
     auto& s = samples[{gi, gj}];
-    s.first += delta;
-    s.second += 1;
+    s.at_p += zi;
+    s.at_q += zj;
+    s.count += 1;
   }
   for (auto& [key, s] : samples) {
-    const double delta = s.first / s.second;
-    r.distance_samples.push_back({key.first, key.second, delta});
+    const double p_at = s.at_p / s.count, q_at = s.at_q / s.count, delta = q_at - p_at;
+    r.distance_samples.push_back({key.first, key.second, delta, p_at, q_at});
     if (std::abs(delta) > 0.5 * h) r.ordered.push_back({key.first, key.second, delta > 0 ? 1 : -1, std::abs(delta) / h});
   }
   // Bridged pairs: two a-groups bordering one chart of another axis are its two ends along a.
@@ -247,6 +252,30 @@ std::vector<int> order_cycle(const OrderAcceptance& acc, const OrderedPair& o) {
   for (int x = lo; x != -1; x = pred[x]) path.push_back(x);
   std::reverse(path.begin(), path.end());
   return path;
+}
+
+std::vector<CycleCut> cycle_cuts(const AxisChartOrder& order, const std::vector<int>& cycle, double min_excess) {
+  // g's height where its region meets group o's (the pair's mean closest-vertex coordinate on g's side)
+  auto height = [&](int g, int o, double& z) {
+    const std::pair<int, int> key{std::min(g, o), std::max(g, o)};
+    auto it = std::lower_bound(order.distance_samples.begin(), order.distance_samples.end(), key,
+                               [](const AxisChartOrder::Sample& x, const std::pair<int, int>& k) {
+                                 return std::make_pair(x.p, x.q) < k;
+                               });
+    if (it == order.distance_samples.end() || it->p != key.first || it->q != key.second) return false;
+    z = g == it->p ? it->p_at : it->q_at;
+    return true;
+  };
+  std::vector<CycleCut> out;
+  const size_t n = cycle.size();
+  if (n < 2) return out;
+  for (size_t i = 0; i < n; ++i) {
+    const int g = cycle[i], below = cycle[(i + n - 1) % n], above = cycle[(i + 1) % n];
+    double z_below = 0, z_above = 0;
+    if (!height(g, below, z_below) || !height(g, above, z_above)) continue;
+    if (z_below - z_above >= min_excess) out.push_back({g, 0.5 * (z_below + z_above), z_below - z_above});
+  }
+  return out;
 }
 
 }  // namespace polyhex

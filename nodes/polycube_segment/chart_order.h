@@ -49,6 +49,8 @@ struct AxisChartOrder {
   struct Sample {
     int p, q;      ///< groups, p < q
     double delta;  ///< mean axis distance (closest vertex of q minus closest vertex of p)
+    double p_at = 0, q_at = 0;  ///< mean axis coordinate of p's / q's closest vertices over the samples
+                                ///< (where along a, on each group, the two regions meet; delta = q_at − p_at)
   };
   std::vector<Sample> distance_samples;  ///< sorted by (p, q)
   std::vector<OrderedPair> ordered;      ///< unique by (p, q), sorted by (p, q)
@@ -107,5 +109,22 @@ void push_levels(const OrderAcceptance& accepted, std::vector<long>& k);
 /// The groups of the cycle a dropped pair closes: a path from its upper to its lower group in the
 /// accepted graph (both ends included); empty when there is none.
 std::vector<int> order_cycle(const OrderAcceptance& accepted, const OrderedPair& dropped);
+
+/// Where a cycle can be cut: a group g on it must lie above the group b below it on the cycle and below
+/// the group t above it. When g's vertices closest to b sit higher along the axis than g's vertices
+/// closest to t (distance samples: g is tilted, or stepped, between the two places), no one plane of g
+/// keeps both orders; cut across g between the two heights, its part near b and its part near t each
+/// get their own plane and the cycle opens there. One cut per such group, at the middle of the two
+/// heights, `excess` = their difference.
+struct CycleCut {
+  int group = -1;
+  double level = 0;   ///< axis coordinate to cut g at
+  double excess = 0;  ///< height of g near b minus height of g near t (> 0)
+};
+
+/// The cuts of `cycle` (order_cycle of `dropped`: lowest first, the dropped pair closing it) whose excess is
+/// at least min_excess; a group met by a bridged pair (no distance samples) on either side is skipped.
+/// \pre every group of cycle in [0, order.groups), order.distance_samples sorted by (p, q)
+std::vector<CycleCut> cycle_cuts(const AxisChartOrder& order, const std::vector<int>& cycle, double min_excess);
 
 }  // namespace polyhex

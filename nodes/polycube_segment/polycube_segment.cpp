@@ -665,17 +665,54 @@ void split_wedges(const Surface& s, const std::vector<Vec3>& normal, const PolyC
       [&](const Extremum& x) { return x.severity >= min_severity; });
 }
 
+/// A cut across chart `chart` at axis coordinate `level` (the chart's own axis), of severity `severity`.
+struct LevelCut {
+  int chart;
+  double level, severity;
+};
+
+/// Each crossing of a cut's level by one of its chart's smoothed edges is a cut start (an Extremum with
+/// cut_chart set, the cut's severity, width 2h: a separating chart of width h). Edges first, then their
+/// two sides, then the chart's cuts in the given order.
+std::vector<Extremum> level_crossings(const Surface& s, const Structure& S, int smoothing,
+                                      const std::vector<LevelCut>& cuts, double h) {
+  std::vector<std::vector<const LevelCut*>> by_chart(S.n);
+  for (auto& c : cuts) by_chart[c.chart].push_back(&c);
+  std::vector<Extremum> out;
+  for (auto& e : S.edges) {
+    if (e.vertices.size() < 3 || (by_chart[e.chart_a].empty() && by_chart[e.chart_b].empty())) continue;
+    const size_t n = e.vertices.size();
+    const std::vector<Vec3> p = smoothed_edge(s, e, smoothing);
+    for (int side = 0; side < 2; ++side) {
+      const int c = side == 0 ? e.chart_a : e.chart_b, other = side == 0 ? e.chart_b : e.chart_a;
+      const int ax = label_axis(S.label[c]);
+      for (const LevelCut* cut : by_chart[c])
+        for (size_t i = 0; i + 1 < n; ++i) {
+          double u = p[i][ax] - cut->level, w = p[i + 1][ax] - cut->level;
+          if ((u < 0) == (w < 0)) continue;
+          Extremum x;
+          x.tip = e.vertices[std::abs(u) <= std::abs(w) ? i : i + 1];
+          x.chart_a = c;
+          x.chart_b = other;
+          x.cut_chart = c;
+          x.severity = cut->severity;
+          x.width = 2 * h;
+          out.push_back(x);
+        }
+    }
+  }
+  return out;
+}
+
 /// Ramps (extension of §5.1, polycube_segment.h): charts whose vertices span more than `extent`
-/// along their own axis (2nd to 98th percentile of the deformed coordinate). Each crossing of the
-/// chart's middle level by one of its smoothed edges is a cut start (an Extremum with cut_chart set,
-/// severity = the chart's span, width 2h: a separating chart of width h).
-/// `only`: when given, the charts to consider (others are skipped).
+/// along their own axis (2nd to 98th percentile of the deformed coordinate), cut across their middle
+/// level (level_crossings, severity = the chart's span). `only`: when given, the charts to consider.
 std::vector<Extremum> find_ramps(const Surface& s, const Structure& S, int smoothing, double extent, double h,
                                  const std::vector<char>* only = nullptr) {
   std::vector<std::vector<int>> verts(S.n);
   for (int t = 0; t < s.nf(); ++t)
     for (int v : (*s.F).row(t)) verts[S.chart[t]].push_back(v);
-  std::vector<double> level(S.n, kInf), span(S.n, 0);
+  std::vector<LevelCut> cuts;
   for (int c = 0; c < S.n; ++c) {
     auto& vs = verts[c];
     std::sort(vs.begin(), vs.end());
@@ -690,33 +727,9 @@ std::vector<Extremum> find_ramps(const Surface& s, const Structure& S, int smoot
     std::nth_element(x.begin(), x.begin() + hi, x.end());
     double xhi = x[hi];
     if (xhi - xlo <= extent) continue;
-    span[c] = xhi - xlo;
-    level[c] = 0.5 * (xlo + xhi);
+    cuts.push_back({c, 0.5 * (xlo + xhi), xhi - xlo});
   }
-  std::vector<Extremum> out;
-  for (auto& e : S.edges) {
-    if (e.vertices.size() < 3 || (level[e.chart_a] == kInf && level[e.chart_b] == kInf)) continue;
-    const size_t n = e.vertices.size();
-    const std::vector<Vec3> p = smoothed_edge(s, e, smoothing);
-    for (int side = 0; side < 2; ++side) {
-      const int c = side == 0 ? e.chart_a : e.chart_b, other = side == 0 ? e.chart_b : e.chart_a;
-      if (level[c] == kInf) continue;
-      const int ax = label_axis(S.label[c]);
-      for (size_t i = 0; i + 1 < n; ++i) {
-        double u = p[i][ax] - level[c], w = p[i + 1][ax] - level[c];
-        if ((u < 0) == (w < 0)) continue;
-        Extremum x;
-        x.tip = e.vertices[std::abs(u) <= std::abs(w) ? i : i + 1];
-        x.chart_a = c;
-        x.chart_b = other;
-        x.cut_chart = c;
-        x.severity = span[c];
-        x.width = 2 * h;
-        out.push_back(x);
-      }
-    }
-  }
-  return out;
+  return level_crossings(s, S, smoothing, cuts, h);
 }
 
 void split_ramps(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p, State& st) {
@@ -728,9 +741,10 @@ void split_ramps(const Surface& s, const std::vector<Vec3>& normal, const PolyCu
 }
 
 /// Same-axis chart pairs whose order evidence closes a cycle (chart_order.h), summed over the axes, for
-/// the structure S; `cycle_charts`, when given, gets a flag per chart: on one of those cycles.
+/// the structure S; `cycle_charts`, when given, gets a flag per chart: on one of those cycles; `cuts`,
+/// when given, the cuts that open them (cycle_cuts: per group, each of its charts at the group's level).
 int order_cycles(const Surface& s, const Structure& S, const TetEdgeGraph& graph, double h,
-                 std::vector<char>* cycle_charts) {
+                 std::vector<char>* cycle_charts, std::vector<LevelCut>* cuts = nullptr, double* dropped_evidence = nullptr) {
   std::vector<std::vector<int>> vcharts(s.V->rows());
   for (int t = 0; t < s.nf(); ++t)
     for (int v : (*s.F).row(t)) {
@@ -738,44 +752,71 @@ int order_cycles(const Surface& s, const Structure& S, const TetEdgeGraph& graph
       if (std::find(cs.begin(), cs.end(), S.chart[t]) == cs.end()) cs.push_back(S.chart[t]);
     }
   if (cycle_charts) cycle_charts->assign(S.n, 0);
+  if (cuts) cuts->clear();
   int total = 0;
   for (int a = 0; a < 3; ++a) {
     const AxisChartOrder order = chart_order_evidence(*s.V, graph, vcharts, S.label, S.adj, a, h);
     const OrderAcceptance acc = accept_orders(order.ordered, order.groups);
     total += int(acc.dropped.size());
-    if (!cycle_charts) continue;
+    if (dropped_evidence)
+      for (int i : acc.dropped) *dropped_evidence += order.ordered[i].evidence;
+    if (!cycle_charts && !cuts) continue;
     std::vector<char> on_cycle(order.groups, 0);
-    for (int i : acc.dropped)
-      for (int g : order_cycle(acc, order.ordered[i])) on_cycle[g] = 1;
-    for (int c = 0; c < S.n; ++c)
-      if (order.chart_group[c] >= 0 && on_cycle[order.chart_group[c]]) (*cycle_charts)[c] = 1;
+    for (int i : acc.dropped) {
+      const std::vector<int> cycle = order_cycle(acc, order.ordered[i]);
+      for (int g : cycle) on_cycle[g] = 1;
+      if (cuts)
+        for (const CycleCut& cc : cycle_cuts(order, cycle, h))
+          for (int c = 0; c < S.n; ++c)
+            if (order.chart_group[c] == cc.group) cuts->push_back({c, cc.level, cc.excess});
+    }
+    if (cycle_charts)
+      for (int c = 0; c < S.n; ++c)
+        if (order.chart_group[c] >= 0 && on_cycle[order.chart_group[c]]) (*cycle_charts)[c] = 1;
   }
   return total;
 }
 
 /// Order cycles (extension of §5.1, polycube_segment.h): while the charts' order evidence contradicts
-/// itself, cut one chart of a cycle across its middle level along its axis (the ramp cut, any span above
-/// the wedge rule's depth), the chart that spans most first; a cut is kept only when it is valid and
-/// lowers the number of cycle-closing pairs.
+/// itself, cut one chart of a cycle across its axis. First the cuts the cycles ask for (cycle_cuts: a
+/// chart whose part near the group below it sits higher than its part near the group above it, cut
+/// between the two heights; largest difference first), then each chart on a cycle across its middle
+/// level (the ramp cut, any span above the wedge rule's depth), the chart that spans most first. A cut is
+/// kept only when it is valid and lowers the number of cycle-closing pairs, or keeps it and lowers their
+/// summed evidence (hex edges) by kMinEvidenceGain: on a helix one cut rarely opens a cycle, it moves it
+/// to the next chart with a smaller contradiction (the twisted bar: 9.5 -> 9.2 -> 7.5 -> ... -> 0.6 -> 0
+/// hex edges over 9 cuts, where requiring fewer pairs stopped at 1 pair of 2.0 hex edges).
+constexpr double kMinEvidenceGain = 0.1;
+
 void split_order_cycles(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p,
                         const TetEdgeGraph& graph, State& st) {
   const double h = p.hex_edge_length * s.diag;
+  auto by_severity = [](std::vector<Extremum> v) {
+    std::stable_sort(v.begin(), v.end(), [](const Extremum& u, const Extremum& w) { return u.severity > w.severity; });
+    return v;
+  };
   while (st.splits_cycle < p.max_splits) {
     throw_if_interrupted();
     Structure S = analyse(s, st.label);
     std::vector<char> on_cycle;
-    const int cycles = order_cycles(s, S, graph, h, &on_cycle);
+    std::vector<LevelCut> cuts;
+    double evidence = 0;
+    const int cycles = order_cycles(s, S, graph, h, &on_cycle, &cuts, &evidence);
     if (cycles == 0) return;
-    const std::vector<Extremum> all =
-        find_ramps(s, S, p.edge_smoothing_iterations, p.extremum_depth * h, h, &on_cycle);
+    const std::vector<Extremum> targeted = by_severity(level_crossings(s, S, p.edge_smoothing_iterations, cuts, h));
+    const std::vector<Extremum> middle =
+        by_severity(find_ramps(s, S, p.edge_smoothing_iterations, p.extremum_depth * h, h, &on_cycle));
+    std::vector<Extremum> all = targeted;
+    all.insert(all.end(), middle.begin(), middle.end());
     std::vector<Extremum> todo = all;
-    std::stable_sort(todo.begin(), todo.end(), [](const Extremum& u, const Extremum& v) { return u.severity > v.severity; });
     if (int(todo.size()) > p.max_cut_candidates) todo.resize(size_t(p.max_cut_candidates));
     bool applied = false;
     for (auto& x : todo) {
       State trial = st;
       if (!cut_wedge(s, normal, S, x, all, p, trial)) continue;
-      if (order_cycles(s, analyse(s, trial.label), graph, h, nullptr) >= cycles) continue;
+      double ev = 0;
+      const int c2 = order_cycles(s, analyse(s, trial.label), graph, h, nullptr, nullptr, &ev);
+      if (c2 > cycles || (c2 == cycles && ev > evidence - kMinEvidenceGain)) continue;
       st = std::move(trial);
       ++st.splits_cycle;
       applied = true;

@@ -27,16 +27,18 @@
 ///   (chart_order.h: the §5.2 Voronoi distance samples and the charts bridged by a chart of another axis)
 ///   can contradict itself, p below q below r below p, where charts are far from planar (the twisted
 ///   bar: 7 such pairs; femur: 1). No plane per chart keeps every order then, and the PolyCube map
-///   swaps the weakest. While there are such cycles, a chart on one is cut across its middle level
-///   along its axis (the ramp cut above, any chart spanning more than extremum_depth hex edges, the
-///   widest first, up to max_cut_candidates starts); a cut is kept only when valid and when it lowers
-///   the number of cycle-closing pairs. What is left is reported (order_cycles; -1 when off, as the tet
-///   edges and the evidence are then not computed: the PolyCube map reports its swapped pairs anyway).
-///   Off by default. Measured (configs/polycube.json, tet edge 0.02): the twist's map keeps 1 order
-///   cycle instead of 7 (534 -> 116 inverted tets, distortion 1.093 -> 1.083), femur's 0 instead of 1
-///   (17,171 -> 17,092); all other shared models have none. But the hex meshes did not follow: twist 0 ->
-///   3 inverted hexes (padding hexes whose outer quad folds across the bar's sharp edge; at tet edge
-///   0.019 / 0.021 it is 4 -> 0 and 1 -> 0), femur's minimum 0.191 -> 0.054.
+///   swaps the weakest. While there are such cycles, a chart on one is cut across its axis: first where
+///   the cycle asks (chart_order.h cycle_cuts: a chart whose part near the chart below it on the cycle
+///   sits higher than its part near the chart above it, cut between the two heights), then across its
+///   middle level (any chart spanning more than extremum_depth hex edges), by the ramp cut above, up to
+///   max_cut_candidates starts; a cut is kept only when valid and when it lowers the number of
+///   cycle-closing pairs or, keeping it, their summed evidence (on a helix a cut mostly moves the cycle
+///   to the next chart with a smaller contradiction). What is left is reported (order_cycles; -1 when
+///   off). Measured (configs/polycube.json, tet edge 0.02): the twist's map keeps no cycle instead of 7
+///   (9 cuts; 534 -> 90 inverted tets, distortion 1.093 -> 1.048), femur none instead of 1 (2 cuts);
+///   the other shared models have none. Femur's hex mesh rose (minimum 0.304 -> 0.365, average 0.924 ->
+///   0.928); the twist's fell (0.188 -> 0.005: padding hexes whose boundary quads fold across the bar's
+///   sharp helical edges), which the default configs' retry catches by a variant without these cuts.
 /// - narrow charts (min_chart_extent, narrow_chart_faces): a chart narrower than a hex edge along an axis
 ///   of its plane is likely to collapse when the map rounds the charts around it onto one plane (for
 ///   extent e hex edges, with probability about 1 - e), leaving its triangles and the volume under them
@@ -74,8 +76,7 @@ struct PolyCubeSegmentParams {
   int max_cut_candidates = 200;        ///< cut candidates tested per wedge, cheapest first
   bool split_ramps = true;             ///< cut charts that climb far along their own axis (extension of §5.1, below)
   double ramp_extent = 12.0;           ///< a chart is a ramp when its vertices span more than this many hex edges along its axis
-  bool split_order_cycles = false;     ///< cut charts whose same-axis order evidence forms a cycle (extension of §5.1, below; off
-                                       ///< by default: the maps improve, the hex meshes did not, see there)
+  bool split_order_cycles = true;      ///< cut charts whose same-axis order evidence forms a cycle (extension of §5.1, below)
   int max_splits = 32;                 ///< upper bound on separating charts of each kind
   bool final_cleanup = true;           ///< after the splits, remove small charts with < 4 neighbours by flood fill (extension of §5.1)
   bool split_islands = true;           ///< cut a ring chart from the boundary of a chart with < 4 neighbours it encloses (extension of §5.1)

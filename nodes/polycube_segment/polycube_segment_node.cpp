@@ -72,7 +72,7 @@ const bool registered = register_node(make_node<P>(
                  json(s.failing_charts).dump() + ")");
       }
       return make_artefact(std::make_shared<const PolyCubeSegmentation>(std::move(s)));
-    }).with_version("6"));
+    }).with_version("7"));
 
 }  // namespace
 }  // namespace polyhex

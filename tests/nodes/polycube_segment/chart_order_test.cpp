@@ -2,6 +2,7 @@
 // order-cycle cuts (polycube_segment.h) on generated meshes.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <numeric>
@@ -168,6 +169,11 @@ TEST_CASE("chart_order_evidence on a box: the X charts' distance is the box's le
     REQUIRE(o.distance_samples.size() == 1);
     const double delta = o.distance_samples[0].p == minus ? o.distance_samples[0].delta : -o.distance_samples[0].delta;
     CHECK(delta == Approx(extent).margin(1e-12));
+    // where the regions meet, on each group: the planes themselves (the faces are flat)
+    const auto& smp = o.distance_samples[0];
+    CHECK((smp.p == minus ? smp.p_at : smp.q_at) == Approx(0).margin(1e-12));
+    CHECK((smp.p == minus ? smp.q_at : smp.p_at) == Approx(extent).margin(1e-12));
+    CHECK(smp.q_at - smp.p_at == Approx(smp.delta).margin(1e-12));
     // one ordered pair (the distance pair; the four bridging charts say the same): - below +
     REQUIRE(o.ordered.size() == 1);
     const OrderedPair& op = o.ordered[0];
@@ -180,5 +186,44 @@ TEST_CASE("chart_order_evidence on a box: the X charts' distance is the box's le
       const int want = x == 0 ? minus : x == extent ? plus : -1;
       if (o.vertex_group[size_t(v)] != want) FAIL("vertex " << v << " group " << o.vertex_group[size_t(v)]);
     }
+  }
+}
+
+TEST_CASE("cycle_cuts: a group whose part near the group below sits above its part near the group above is cut between",
+          "[chart-order]") {
+  // a helical stair of three groups along a: 0 < 1 (1's region meets 0's at 1's height 3),
+  // 1 < 2, 2 < 0 (dropped). Heights (g at its interface with o) chosen so that only group 2 is tilted the
+  // wrong way: near 1 (below it) at 9, near 0 (above it) at 2.
+  AxisChartOrder o;
+  o.groups = 3;
+  auto add = [&](int g, double g_at, int other, double other_at) {
+    AxisChartOrder::Sample smp{std::min(g, other), std::max(g, other), 0};
+    smp.p_at = g < other ? g_at : other_at;
+    smp.q_at = g < other ? other_at : g_at;
+    smp.delta = smp.q_at - smp.p_at;
+    o.distance_samples.push_back(smp);
+  };
+  add(0, 1.0, 1, 3.0);   // 0 at 1 below 1 at 3
+  add(1, 5.0, 2, 9.0);   // 1 at 5 below 2 at 9
+  add(2, 2.0, 0, 0.5);   // 2 at 2 "below" 0 at 0.5: the contradiction
+  std::sort(o.distance_samples.begin(), o.distance_samples.end(),
+            [](const auto& x, const auto& y) { return std::make_pair(x.p, x.q) < std::make_pair(y.p, y.q); });
+  const std::vector<int> cycle{0, 1, 2};  // 0 < 1 < 2, and the dropped pair 2 < 0 closes it
+  // group 0: near 2 (below) at 0.5, near 1 (above) at 1: fine; group 1: near 0 at 3, near 2 at 5: fine;
+  // group 2: near 1 (below) at 9, near 0 (above) at 2: excess 7, cut at 5.5
+  std::vector<CycleCut> cuts = cycle_cuts(o, cycle, 0.5);
+  REQUIRE(cuts.size() == 1);
+  CHECK(cuts[0].group == 2);
+  CHECK(cuts[0].level == Approx(5.5));
+  CHECK(cuts[0].excess == Approx(7.0));
+  SECTION("a smaller difference than min_excess is not a cut") { CHECK(cycle_cuts(o, cycle, 7.5).empty()); }
+  SECTION("a group met by a bridged pair (no samples) is skipped") {
+    o.distance_samples.erase(o.distance_samples.begin() + 1);  // (1, 2)
+    CHECK(cycle_cuts(o, cycle, 0.5).empty());
+  }
+  SECTION("group 2 tilted the other way (its part near 0 the higher) asks for no cut") {
+    for (auto& smp : o.distance_samples)
+      if (smp.p == 0 && smp.q == 2) smp.q_at = 9.5, smp.delta = smp.q_at - smp.p_at;
+    CHECK(cycle_cuts(o, cycle, 0.5).empty());
   }
 }
