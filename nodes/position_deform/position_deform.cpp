@@ -85,6 +85,8 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
     throw ConfigError("final_solve = \"" + p.final_solve + "\" is not one of: mvc_laplace, poisson");
   if (p.level_placement != "balanced" && p.level_placement != "push_up")
     throw ConfigError("level_placement = \"" + p.level_placement + "\" is not one of: balanced, push_up");
+  if (p.map_polish != "region" && p.map_polish != "everywhere")
+    throw ConfigError("map_polish = \"" + p.map_polish + "\" is not one of: region, everywhere");
   const int nC = int(seg.charts.size());
   if (seg.chart.size() != seg.F.rows()) throw InvalidInput(input.source + ": segmentation has no chart per triangle");
   for (Eigen::Index f = 0; f < seg.F.rows(); ++f) {
@@ -419,6 +421,7 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
     up.max_iterations = p.untangle_iterations;
     up.rings = p.untangle_rings;
     up.seconds = p.untangle_seconds;
+    up.polish_everywhere = p.map_polish == "everywhere";
     untangle_polycube_map(input.V, input.T, out.U, fixed_axes, up, &st.untangle);
   }
 

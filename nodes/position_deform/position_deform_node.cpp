@@ -24,6 +24,8 @@ const bool registered = register_node(make_node<P>(
         .add("untangle_iterations", &P::untangle_iterations, "L-BFGS iterations of the map's untangling (0 = keep the folds)", 0, 1000000)
         .add("untangle_rings", &P::untangle_rings, "the untangling moves the inverted tets' vertices grown by this many rings", 0, 50)
         .add("untangle_seconds", &P::untangle_seconds, "wall-time cap of the untangling (0 = none)", 0.0, 3600.0)
+        .add_choice("map_polish", &P::map_polish, {"region", "everywhere"},
+                    "after the untangling, the barrier polish of the untangled region or of the whole map")
         .add("max_hexes", &P::max_hexes, "refuse up front when volume / h^3 exceeds this", 1e3, 2e9),
     {{"tets", artefact_name<TetMesh>()},
      {"deformed", artefact_name<TetMesh>()},
@@ -63,7 +65,7 @@ const bool registered = register_node(make_node<P>(
       if (s.merged_same_axis_charts > 0)
         ctx.warn(std::to_string(s.merged_same_axis_charts) + " same-axis charts share a vertex and were put on one plane");
       return make_artefact(std::move(m));
-    }).with_version("4"));
+    }).with_version("5"));
 
 // --save-all writes the PolyCube map as the tet mesh at its PolyCube positions (<id>.polycube.vtk) and
 // the PolyCube surface with chart ids and labels as cell data (<id>.polycube_surface.vtk).

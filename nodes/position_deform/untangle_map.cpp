@@ -44,10 +44,17 @@ class MapUntangler {
     st_.inverted_before = std::count(inv.begin(), inv.end(), 1) + std::count(inv.begin(), inv.end(), 2);
     st_.flat = std::count(inv.begin(), inv.end(), 2);
     st_.inverted_after = st_.inverted_before;
-    if (st_.inverted_before == 0 || p_.rounds == 0 || p_.max_iterations <= 0) return st_.inverted_after;
+    if (st_.inverted_before == 0 || p_.rounds == 0 || p_.max_iterations <= 0) {
+      if (p_.polish_everywhere) polish(inv);
+      return st_.inverted_after;
+    }
     select(inv);
-    if (free_.empty()) return st_.inverted_after;
+    if (free_.empty()) {
+      if (p_.polish_everywhere) polish(inv);
+      return st_.inverted_after;
+    }
 
+    st_.inverted_after = count_inverted() + st_.flat;  // as the rounds count (tets with a free vertex)
     double mindet = min_det();
     double eps = std::sqrt(1e-12 + 0.04 * std::min(mindet, 0.0) * std::min(mindet, 0.0));
     bool untangled = false;
@@ -71,22 +78,49 @@ class MapUntangler {
       st_.inverted_after = count_inverted() + st_.flat;
       if (untangled || st_.inverted_after == st_.flat) break;
       // a round that turns no tet round will not be followed by one that does: what is left is stuck (its
-      // vertices pinned by the chart planes) or a sliver the schedule ignores, and ε is at its floor
+      // vertices pinned by the chart planes) or a sliver the schedule ignores, and ε is at its floor. A round
+      // that left more inverted than it found is undone (femur: 15,920 -> 16,612 kept before).
+      if (st_.inverted_after > before_round) {
+        apply(VecX::Zero(ndof_));
+        st_.inverted_after = before_round;
+      }
       if (st_.inverted_after >= before_round) break;
       set_base();
       const double e = energy(VecX::Zero(ndof_), eps, nullptr);
       mindet = min_det();
       eps = optimize_detail::next_eps(eps, e, e_prev, mindet);
     }
+    polish(inv);
+    return st_.inverted_after;
+  }
+
+ private:
+  /// L-BFGS at ε -> 0 on the untangled region, or with polish_everywhere on every vertex that may move.
+  void polish(const std::vector<char>& inv) {
     if (p_.polish_iterations > 0 && !out_of_time()) {
       // At ε -> 0 the energy is a barrier: no tet inverts; kept only if that holds numerically. The
       // untangling leaves the tets it turned round barely positive; the polish spreads that. Tets still
       // inverted keep their vertices where they are and leave the energy (the barrier would be infinite).
-      if (st_.inverted_after > st_.flat) {
+      // Tets within a millionth of the mean volume of turning over are frozen too: the barrier's gradient
+      // there is so steep that no step the line search tries keeps them positive (femur: the polish ended
+      // after 1 iteration, leaving tets of distortion 1e15).
+      const double cut = 1e-6 * mean_volume6(inv);
+      if (p_.polish_everywhere) {
+        std::vector<char> region(size_t(U_.rows()), 1), skip(size_t(T_.rows()), 0);
+        for (Eigen::Index t = 0; t < T_.rows(); ++t)
+          if (inv[size_t(t)] >= 2) {
+            skip[size_t(t)] = 1;
+          } else if (volume6(t) <= cut) {
+            skip[size_t(t)] = 1;
+            for (int k = 0; k < 4; ++k) region[size_t(T_(t, k))] = 0;
+          }
+        build(region, skip);
+        if (free_.empty()) return;
+      } else if (st_.inverted_after > st_.flat) {
         std::vector<char> region(size_t(U_.rows()), 0), skip(size_t(T_.rows()), 0);
         for (int v : free_) region[size_t(v)] = 1;
         for (int t : active_)
-          if (volume6(t) <= 0) {
+          if (volume6(t) <= cut) {
             skip[size_t(t)] = 1;
             for (int k = 0; k < 4; ++k) region[size_t(T_(t, k))] = 0;
           }
@@ -113,10 +147,8 @@ class MapUntangler {
       }
       apply(good);
     }
-    return st_.inverted_after;
   }
 
- private:
   LbfgsOptions options(int iterations) const {
     LbfgsOptions o;
     o.iterations = iterations;
@@ -130,6 +162,15 @@ class MapUntangler {
     if (p_.seconds > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count() > p_.seconds)
       st_.time_budget_hit = true;
     return st_.time_budget_hit;
+  }
+
+  /// Mean of 6 × the PolyCube volume over the tets that are not flat (inv < 2).
+  double mean_volume6(const std::vector<char>& inv) const {
+    double sum = 0;
+    long n = 0;
+    for (Eigen::Index t = 0; t < T_.rows(); ++t)
+      if (inv[size_t(t)] < 2) sum += volume6(t), ++n;
+    return n > 0 ? std::max(sum / double(n), 0.0) : 0.0;
   }
 
   /// 6 × the signed volume of tet t in the PolyCube domain.

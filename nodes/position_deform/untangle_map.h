@@ -32,6 +32,8 @@ struct MapUntangleParams {
   long max_iterations = 600;    ///< L-BFGS iterations of all rounds together (the polish apart); 0 = no untangling
   int rings = 2;                ///< free vertices: the inverted tets' vertices grown by this many tet rings, [0, 50]
   int polish_iterations = 200;  ///< after the rounds: L-BFGS iterations at ε -> 0 on the region, [0, 100000]
+  bool polish_everywhere = false;  ///< the polish moves every vertex that may move (not only the untangled region), also
+                                   ///< when nothing was inverted: the map as a whole towards a conformal one
   double seconds = 0;           ///< wall-time cap, checked per L-BFGS iteration (the map so far is kept); 0 = none.
                                 ///< The iteration budget keeps runs deterministic; a cap that is hit does not
 };
