@@ -317,14 +317,15 @@ CacheLookup ArtefactCache::load(const std::string& node_type, const std::string&
     return invalid(e.what());
   }
   if (!r.artefact || r.artefact.type != artefact_type) return invalid("the codec returned no " + artefact_type);
+  r.digest = fnv1a128_hex(bytes.substr(c.pos, size_t(payload_len)));
   r.status = CacheLookup::Status::hit;
   std::error_code ec;
   fs::last_write_time(path, fs::file_time_type::clock::now(), ec);  // LRU; the entry may be gone meanwhile
   return r;
 }
 
-void ArtefactCache::store(const std::string& node_type, const std::string& key, const Artefact& a, const json& metrics,
-                          const std::vector<std::string>& warnings) const {
+std::string ArtefactCache::store(const std::string& node_type, const std::string& key, const Artefact& a, const json& metrics,
+                                 const std::vector<std::string>& warnings) const {
   const ArtefactCodec* codec = Registry::instance().codec(a.type);
   if (!a || !codec) throw Error("artefact cache: cannot store a " + (a ? a.type : std::string("missing artefact")));
   std::error_code ec;
@@ -338,10 +339,12 @@ void ArtefactCache::store(const std::string& node_type, const std::string& key, 
   put_u32(bytes, codec->version);
   put_block(bytes, a.type);
   put_block(bytes, meta.dump());
-  put_block(bytes, payload.str());
+  const std::string body = payload.str();
+  put_block(bytes, body);
   put_u64(bytes, fnv1a64(bytes.data(), bytes.size()));
   write_file_atomic(entry_path(node_type, key), [&](std::ostream& out) { out.write(bytes.data(), std::streamsize(bytes.size())); },
                     /*binary=*/true);
+  return fnv1a128_hex(body);
 }
 
 CacheStats ArtefactCache::stats() const {

@@ -6,7 +6,11 @@
 /// version (NodeSpec::version), its canonical params (sorted keys, every number as the shortest
 /// round-trip double, -0 as 0), the keys of its input nodes in port order, and for every file the node
 /// reads (NodeSpec::input_files) its size and FNV-1a 64 of its bytes. The node id is not part of the key,
-/// so the same node under another id or in another config reuses the entry.
+/// so the same node under another id or in another config reuses the entry. Pipeline::run keys an input
+/// by its artefact's *content* when the cache has it ("d:" + FNV-1a 128 of the codec's payload, from the
+/// store or the load; else the input's own key, "k:" + key): a param change that leaves a node's output
+/// as it was (a refusal bound not reached, a pass with nothing to do) reruns that node only, everything
+/// after it is loaded.
 ///
 /// **Entry** `DIR/<stage>.<variant>-<key>.phc`, all integers little-endian:
 ///
@@ -73,6 +77,7 @@ struct CacheLookup {
   json metrics = json::object();       ///< the node's metrics when it was computed
   std::vector<std::string> warnings;   ///< the node's warnings when it was computed
   std::string problem;                 ///< why an entry is invalid
+  std::string digest;                  ///< on a hit: FNV-1a 128 (hex) of the payload (what store returned)
 };
 
 /// Totals of a cache folder.
@@ -95,10 +100,10 @@ class ArtefactCache {
   /// Looks an entry up and, on a hit, touches it (LRU). Never throws for a bad entry: it is `invalid`.
   /// \pre a codec is registered for artefact_type
   CacheLookup load(const std::string& node_type, const std::string& key, const std::string& artefact_type) const;
-  /// Stores (replaces) an entry atomically.
+  /// Stores (replaces) an entry atomically. \return FNV-1a 128 (hex) of the payload (the artefact's content)
   /// \pre `a` is not empty and its type has a codec   \throw IOError when the folder or file cannot be written
-  void store(const std::string& node_type, const std::string& key, const Artefact& a, const json& metrics,
-             const std::vector<std::string>& warnings) const;
+  std::string store(const std::string& node_type, const std::string& key, const Artefact& a, const json& metrics,
+                    const std::vector<std::string>& warnings) const;
 
   /// Counts entries and bytes (a missing folder is an empty cache). \throw IOError when it cannot be listed
   CacheStats stats() const;

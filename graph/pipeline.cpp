@@ -195,6 +195,7 @@ RunResult Pipeline::run(const RunOptions& opt) const {
     keys = cache_keys();
   }
   std::vector<Artefact> outputs(nodes_.size());
+  std::vector<std::string> identity(nodes_.size());  // per node what its dependants' keys name it by
   std::mutex event_mutex;
   auto event = [&](const std::string& e, const ResolvedNode& n, double v, const std::string& what) {
     if (!opt.on_event) return;
@@ -214,14 +215,29 @@ RunResult Pipeline::run(const RunOptions& opt) const {
     Inputs in;
     for (int u : n.input_nodes) in.items.push_back(u >= 0 ? outputs[u] : Artefact{});
     auto t0 = std::chrono::steady_clock::now();
+    // The key: each input by its content where known, else by its own key (graph/cache.h); none when an
+    // input has neither (it cannot be cached) or a file the node reads cannot be read (keys[i] empty).
+    std::string key;
+    if (cache && !keys[i].empty()) {
+      std::vector<std::string> in_ids;
+      bool known = true;
+      for (int u : n.input_nodes) {
+        in_ids.push_back(u >= 0 ? identity[size_t(u)] : std::string());
+        known = known && (u < 0 || !identity[size_t(u)].empty());
+      }
+      if (known) key = n.input_nodes.empty() ? keys[i] : node_key(*n.spec, n.params, in_ids);
+    }
+    rec.cache_key = key;
+    if (!key.empty()) identity[i] = "k:" + key;  // replaced by the content digest below when there is one
     // The cache: sinks always run; outputs without a codec are not cached.
-    const bool cacheable = cache && !keys[i].empty() && !n.spec->output.empty() &&
+    const bool cacheable = cache && !key.empty() && !n.spec->output.empty() &&
                            Registry::instance().codec(n.spec->output) != nullptr;
     std::vector<std::string> cache_warnings;
     if (cacheable && !writes_side_files(n, opt.save_all)) {
-      CacheLookup hit = cache->load(n.spec->type, keys[i], n.spec->output);
+      CacheLookup hit = cache->load(n.spec->type, key, n.spec->output);
       if (hit.status == CacheLookup::Status::hit) {
         outputs[i] = std::move(hit.artefact);
+        identity[i] = "d:" + hit.digest;
         rec.cache_hit = true;
         rec.ran = true;
         rec.metrics = std::move(hit.metrics);
@@ -256,7 +272,7 @@ RunResult Pipeline::run(const RunOptions& opt) const {
     rec.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (cacheable) {
       try {
-        cache->store(n.spec->type, keys[i], outputs[i], ctx.metrics, ctx.warnings);
+        identity[i] = "d:" + cache->store(n.spec->type, key, outputs[i], ctx.metrics, ctx.warnings);
       } catch (const std::exception& e) {
         cache_warnings.push_back(std::string("cache: could not store the result: ") + e.what());
       }

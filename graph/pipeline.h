@@ -33,6 +33,7 @@ struct NodeRecord {
   double seconds = 0;
   bool cache_hit = false;        ///< the output, metrics and warnings were loaded from the artefact cache
   bool ran = false;              ///< the node completed (computed, or loaded from the cache)
+  std::string cache_key;         ///< the key its output was looked up and stored under ("" when not cached)
   json metrics = json::object();
   std::vector<std::string> warnings;
 };
@@ -72,8 +73,10 @@ class Pipeline {
   const std::vector<ResolvedNode>& nodes() const { return nodes_; }
   /// Graphviz DOT of the pipeline: nodes with their type and params, edges labelled with artefact types.
   std::string dot() const;
-  /// Cache key of every node (graph/cache.h, node_key), in config order; "" for a node that cannot be
-  /// cached because a file it reads cannot be read or an input cannot be cached.
+  /// Cache key of every node (graph/cache.h, node_key) from its inputs' keys, in config order; "" for a
+  /// node that cannot be cached because a file it reads cannot be read or an input cannot be cached. A run
+  /// keys a node by its inputs' contents where the cache has them (NodeRecord::cache_key, graph/cache.h):
+  /// the two agree for the nodes without inputs.
   std::vector<std::string> cache_keys() const;
   /// Runs the graph. Never throws for node failures: they are in RunResult::error (and the report).
   /// \throw IOError when the output folder cannot be created

@@ -273,6 +273,30 @@ TEST_CASE("cache: a param change recomputes only the node and its downstream", "
   fs::remove_all(dir);
 }
 
+TEST_CASE("cache: a param change that leaves a node's output as it was recomputes that node only", "[cache]") {
+  fs::path dir = polyhex::test::fresh_dir("cache_same_output");
+  json chain = box_chain(small_box(), 0.3);
+  RunResult a = run(build(chain), dir, "a");
+  REQUIRE(a.error.empty());
+  // a refusal bound far above the tet count: another key for the tets, the same tets
+  chain[1]["params"]["max_tets"] = 1000000;
+  RunResult b = run(build(chain), dir, "b");
+  REQUIRE(b.error.empty());
+  CHECK(rec(b, "surface").cache_hit);
+  CHECK_FALSE(rec(b, "tets").cache_hit);
+  CHECK(rec(b, "tets").cache_key != rec(a, "tets").cache_key);
+  CHECK(rec(b, "hex").cache_hit);  // keyed by the tets' content, not by the tets' params
+  CHECK(rec(b, "hex").cache_key == rec(a, "hex").cache_key);
+  CHECK(read_text(dir / "a" / "hex.vtk") == read_text(dir / "b" / "hex.vtk"));
+  // a change that does change the tets recomputes the hexes
+  chain[1]["params"]["edge_length"] = 0.15;
+  RunResult c = run(build(chain), dir, "c");
+  CHECK_FALSE(rec(c, "tets").cache_hit);
+  CHECK_FALSE(rec(c, "hex").cache_hit);
+  CHECK(read_text(dir / "a" / "hex.vtk") != read_text(dir / "c" / "hex.vtk"));
+  fs::remove_all(dir);
+}
+
 TEST_CASE("cache: a changed input file invalidates its reader and everything downstream", "[cache]") {
   fs::path dir = polyhex::test::fresh_dir("cache_file");
   ShapeParams sp;
@@ -320,7 +344,9 @@ TEST_CASE("cache: corrupt, truncated and old-version entries are ignored with a 
   const std::string reference = read_text(dir / "first" / "hex.vtk");
   REQUIRE(reference.size() > 1000);
   ArtefactCache cache(dir / "cache");
-  const fs::path entry = cache.entry_path("tetrahedralize/tetgen", p.cache_keys()[1]);
+  CHECK(first.nodes[0].cache_key == p.cache_keys()[0]);  // no inputs: the two keys agree
+  REQUIRE(!first.nodes[1].cache_key.empty());            // the tets: keyed by the surface's content
+  const fs::path entry = cache.entry_path("tetrahedralize/tetgen", first.nodes[1].cache_key);
   REQUIRE(fs::exists(entry));
   const std::string good = read_text(entry);
 
