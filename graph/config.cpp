@@ -117,6 +117,10 @@ void apply_override(json& config, const std::string& assignment) {
   }
 }
 
+std::string strip_source(const std::string& msg, const std::string& source) {
+  return msg.rfind(source + ": ", 0) == 0 ? msg.substr(source.size() + 2) : msg;
+}
+
 void set_param(json& config, const std::string& id, const std::string& param, const json& value) {
   std::string ids;
   if (config.is_object() && config.contains("nodes") && config["nodes"].is_array()) {

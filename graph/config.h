@@ -44,6 +44,9 @@ PipelineConfig parse_config(const json& j, const std::string& source);
 /// \throw ConfigError when the file is missing or not valid JSON (with the parser's position).
 json load_config_json(const std::filesystem::path& path, const std::map<std::string, std::string>& vars);
 
+/// `msg` without a leading "`source`: " (to re-prefix a config error with a more precise place).
+std::string strip_source(const std::string& msg, const std::string& source);
+
 /// Sets param `param` of the node with id `id` in the config JSON to `value` (creating its `params`).
 /// \throw ConfigError "no node with id `ID`; ids: ..." when no node has that id.
 void set_param(json& config, const std::string& id, const std::string& param, const json& value);

@@ -98,7 +98,7 @@ void block_in_other_threads() {
   // every signal around clone() and the new thread sets its real mask a moment later. A library that
   // starts threads in a constructor does not wait for that, so a thread seen in that state is polled
   // again rather than taken as "blocks everything" (it then unblocked SIGTERM and took the signal).
-  const unsigned long long starting = 1ULL << 31;
+  const unsigned long long starting = bit(32);
   std::vector<long> asked;
   bool settled = false;
   const auto t0 = std::chrono::steady_clock::now();

@@ -63,9 +63,7 @@ RetryPlan parse_retry(const json& block, const json& config, const Pipeline& bas
     try {
       r.pipelines.push_back(Pipeline::build(parse_config(c, source)));
     } catch (const ConfigError& e) {
-      std::string what = e.what();
-      if (what.rfind(source + ": ", 0) == 0) what = what.substr(source.size() + 2);
-      throw ConfigError(w + ": " + what);
+      throw ConfigError(w + ": " + strip_source(e.what(), source));
     }
     r.variants.push_back(v);
   }

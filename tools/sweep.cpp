@@ -117,11 +117,6 @@ std::string join(const std::vector<std::string>& v, const std::string& sep) {
   return s;
 }
 
-// A ConfigError message without the leading "SOURCE: " (the sweep path is prefixed instead).
-std::string strip_source(const std::string& msg, const std::string& source) {
-  return msg.rfind(source + ": ", 0) == 0 ? msg.substr(source.size() + 2) : msg;
-}
-
 // Checks `key` = `<id>.<param>` against the base pipeline. \throw ConfigError naming `where`
 void check_target(const std::string& key, const Pipeline& base, const std::string& where) {
   const auto dot = key.find('.');
