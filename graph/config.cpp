@@ -9,9 +9,25 @@
 
 namespace polyhex {
 
-json substitute_vars(const json& j, const std::map<std::string, std::string>& vars, const std::string& source) {
+namespace {
+
+const std::regex& var_regex() {
+  static const std::regex re(R"(\$\{([A-Za-z_][A-Za-z0-9_]*)(:-([^}]*))?\})");
+  return re;
+}
+
+// Names of the config's own `vars` block (left for resolve_config_vars by substitute_vars).
+std::set<std::string> config_var_names(const json& j) {
+  std::set<std::string> names;
+  if (j.is_object() && j.contains("vars") && j["vars"].is_object())
+    for (auto it = j["vars"].begin(); it != j["vars"].end(); ++it) names.insert(it.key());
+  return names;
+}
+
+json substitute(const json& j, const std::map<std::string, std::string>& vars, const std::set<std::string>& keep,
+                const std::string& source) {
   if (j.is_string()) {
-    static const std::regex re(R"(\$\{([A-Za-z_][A-Za-z0-9_]*)(:-([^}]*))?\})");
+    const std::regex& re = var_regex();
     std::string s = j.get<std::string>(), out;
     auto begin = std::sregex_iterator(s.begin(), s.end(), re);
     size_t last = 0;
@@ -19,7 +35,9 @@ json substitute_vars(const json& j, const std::map<std::string, std::string>& va
       const std::smatch& m = *it;
       out += s.substr(last, m.position(0) - last);
       auto v = vars.find(m[1].str());
-      if (v != vars.end() && !v->second.empty())
+      if (keep.count(m[1].str()))
+        out += m.str(0);
+      else if (v != vars.end() && !v->second.empty())
         out += v->second;
       else if (m[2].matched)
         out += m[3].str();
@@ -32,10 +50,48 @@ json substitute_vars(const json& j, const std::map<std::string, std::string>& va
   }
   if (j.is_array() || j.is_object()) {
     json r = j;
-    for (auto it = r.begin(); it != r.end(); ++it) *it = substitute_vars(*it, vars, source);
+    for (auto it = r.begin(); it != r.end(); ++it) *it = substitute(*it, vars, keep, source);
     return r;
   }
   return j;
+}
+
+// `${name}` of the config's `vars` in one param value: a string that is exactly one reference takes
+// the var's value with its JSON type (a number stays a number); a reference inside a longer string is
+// replaced by the value's text.
+json resolve_value(const json& j, const json& vars, const std::string& where) {
+  if (j.is_array() || j.is_object()) {
+    json r = j;
+    for (auto it = r.begin(); it != r.end(); ++it) *it = resolve_value(*it, vars, where);
+    return r;
+  }
+  if (!j.is_string()) return j;
+  const std::string s = j.get<std::string>();
+  std::smatch m;
+  auto value_of = [&](const std::string& name) -> const json& {
+    if (!vars.contains(name)) {
+      std::string names;
+      for (auto it = vars.begin(); it != vars.end(); ++it) names += (names.empty() ? "" : ", ") + it.key();
+      throw ConfigError(where + ": `${" + name + "}` is not a var of the config; vars: " +
+                        (names.empty() ? "(none)" : names));
+    }
+    return vars[name];
+  };
+  if (std::regex_match(s, m, var_regex()) && !m[2].matched) return value_of(m[1].str());
+  std::string out;
+  size_t last = 0;
+  for (auto it = std::sregex_iterator(s.begin(), s.end(), var_regex()); it != std::sregex_iterator(); ++it) {
+    const json& v = value_of((*it)[1].str());
+    out += s.substr(last, size_t(it->position(0)) - last) + (v.is_string() ? v.get<std::string>() : v.dump());
+    last = size_t(it->position(0) + it->length(0));
+  }
+  return last == 0 ? j : json(out + s.substr(last));
+}
+
+}  // namespace
+
+json substitute_vars(const json& j, const std::map<std::string, std::string>& vars, const std::string& source) {
+  return substitute(j, vars, config_var_names(j), source);
 }
 
 PipelineConfig parse_config(const json& j, const std::string& source) {
@@ -43,8 +99,19 @@ PipelineConfig parse_config(const json& j, const std::string& source) {
   cfg.source = source;
   if (!j.is_object()) throw ConfigError(source + ": a config is a JSON object with a `nodes` array");
   for (auto it = j.begin(); it != j.end(); ++it)
-    if (it.key() != "nodes" && it.key() != "description" && it.key() != "sweep" && it.key() != "retry")
-      throw ConfigError(source + ": unknown top-level key `" + it.key() + "`; valid keys: nodes, description, sweep, retry");
+    if (it.key() != "nodes" && it.key() != "description" && it.key() != "sweep" && it.key() != "retry" &&
+        it.key() != "vars")
+      throw ConfigError(source + ": unknown top-level key `" + it.key() +
+                        "`; valid keys: nodes, vars, description, sweep, retry");
+  const json vars = j.contains("vars") ? j["vars"] : json::object();
+  if (!vars.is_object()) throw ConfigError(source + ": `vars` must be an object {\"name\": value}");
+  static const std::regex var_name_re("[A-Za-z_][A-Za-z0-9_]*");
+  for (auto it = vars.begin(); it != vars.end(); ++it) {
+    if (!std::regex_match(it.key(), var_name_re))
+      throw ConfigError(source + ": vars: `" + it.key() + "` is not a name ([A-Za-z_][A-Za-z0-9_]*)");
+    if (!it.value().is_number() && !it.value().is_string() && !it.value().is_boolean())
+      throw ConfigError(source + ": vars." + it.key() + ": a number, string or boolean, got " + it.value().dump());
+  }
   if (!j.contains("nodes") || !j["nodes"].is_array() || j["nodes"].empty())
     throw ConfigError(source + ": `nodes` must be a non-empty array");
   std::set<std::string> ids;
@@ -62,11 +129,12 @@ PipelineConfig parse_config(const json& j, const std::string& source) {
     where = source + ": node `" + nc.id + "`";
     if (!std::regex_match(nc.id, id_re)) throw ConfigError(where + ": an id uses only letters, digits, _ and -");
     if (!ids.insert(nc.id).second) throw ConfigError(where + ": duplicate id");
+    if (nc.id == "vars") throw ConfigError(where + ": `vars` is reserved (`--set vars.NAME=value` sets a config var)");
     if (!n.contains("type") || !n["type"].is_string()) throw ConfigError(where + ": missing string `type`");
     nc.type = n["type"].get<std::string>();
     if (n.contains("params")) {
       if (!n["params"].is_object()) throw ConfigError(where + ": `params` must be an object");
-      nc.params = n["params"];
+      nc.params = resolve_value(n["params"], vars, where);
     }
     if (n.contains("inputs")) {
       const json& in = n["inputs"];
@@ -122,6 +190,15 @@ std::string strip_source(const std::string& msg, const std::string& source) {
 }
 
 void set_param(json& config, const std::string& id, const std::string& param, const json& value) {
+  if (id == "vars") {
+    if (config.is_object() && config.contains("vars") && config["vars"].is_object() && config["vars"].contains(param)) {
+      config["vars"][param] = value;
+      return;
+    }
+    std::string names;
+    for (const std::string& n : config_var_names(config)) names += (names.empty() ? "" : ", ") + n;
+    throw ConfigError("the config has no var `" + param + "`; vars: " + (names.empty() ? "(none)" : names));
+  }
   std::string ids;
   if (config.is_object() && config.contains("nodes") && config["nodes"].is_array()) {
     for (json& n : config["nodes"]) {

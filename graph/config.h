@@ -1,6 +1,13 @@
 /// @file config.h
-/// @brief Pipeline configs: JSON `{"nodes": [{id, type, params, inputs}]}`, `${var}` substitution and
-/// `--set id.param=value` overrides.
+/// @brief Pipeline configs: JSON `{"vars": {...}, "nodes": [{id, type, params, inputs}]}`, `${var}`
+/// substitution and `--set id.param=value` overrides.
+///
+/// Two kinds of `${name}`: command-line vars (`--input FILE` is `${input}`), replaced when the file is
+/// loaded, and the config's own `vars` block (`"vars": {"tet_edge": 0.02}`), replaced in the node params
+/// when the config is parsed, after every override: one value that several params follow (the tet size
+/// used by the surface conditioning and by TetGen). `--set vars.tet_edge=0.03`, a sweep axis
+/// `vars.tet_edge` and a retry variant's `"vars.tet_edge"` change it; `--set tets.edge_length=0.03`
+/// still sets that one param alone.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -29,15 +36,18 @@ struct PipelineConfig {
   std::string source;  ///< file name or "<string>", for messages
 };
 
-/// Replaces `${name}` and `${name:-default}` in every string of `j` by vars[name] (or the default).
+/// Replaces `${name}` and `${name:-default}` in every string of `j` by vars[name] (or the default),
+/// except the names of j's own `vars` block, which parse_config resolves.
 /// \throw ConfigError naming `source` when a variable has no value and no default.
 json substitute_vars(const json& j, const std::map<std::string, std::string>& vars, const std::string& source);
 
 /// Checks the structure of a config (top-level object with a `nodes` array, each node an object with
 /// string `id` and `type`, optional object `params`, object-or-array `inputs`, no other keys, unique ids).
 /// The optional top-level `description`, `sweep` (tools/sweep.cpp) and `retry` (runtime/cli_run.h) are
-/// checked by their users.
-/// \throw ConfigError naming the source and the node.
+/// checked by their users. `vars` (name -> number, string or boolean) is substituted into the params:
+/// a param that is exactly `"${name}"` takes the var's value and type.
+/// \throw ConfigError naming the source and the node (a reference to an undefined var lists the vars;
+///        the id `vars` is reserved).
 PipelineConfig parse_config(const json& j, const std::string& source);
 
 /// Reads a JSON config file, then substitutes variables.
@@ -47,8 +57,10 @@ json load_config_json(const std::filesystem::path& path, const std::map<std::str
 /// `msg` without a leading "`source`: " (to re-prefix a config error with a more precise place).
 std::string strip_source(const std::string& msg, const std::string& source);
 
-/// Sets param `param` of the node with id `id` in the config JSON to `value` (creating its `params`).
-/// \throw ConfigError "no node with id `ID`; ids: ..." when no node has that id.
+/// Sets param `param` of the node with id `id` in the config JSON to `value` (creating its `params`);
+/// id `vars` sets the config var `param` instead.
+/// \throw ConfigError "no node with id `ID`; ids: ..." when no node has that id; "the config has no var"
+///        for an undefined var.
 void set_param(json& config, const std::string& id, const std::string& param, const json& value);
 
 /// Applies `id.param=value` to the config JSON. The value is parsed as JSON when it parses

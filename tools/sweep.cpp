@@ -117,12 +117,13 @@ std::string join(const std::vector<std::string>& v, const std::string& sep) {
   return s;
 }
 
-// Checks `key` = `<id>.<param>` against the base pipeline. \throw ConfigError naming `where`
+// Checks `key` = `<id>.<param>` (or `vars.<name>`) against the base pipeline. \throw ConfigError naming `where`
 void check_target(const std::string& key, const Pipeline& base, const std::string& where) {
   const auto dot = key.find('.');
   if (dot == std::string::npos || dot == 0 || dot + 1 == key.size() || key.find('.', dot + 1) != std::string::npos)
     throw ConfigError(where + ": `" + key + "` is not `<node id>.<param>`");
   const std::string id = key.substr(0, dot), param = key.substr(dot + 1);
+  if (id == "vars") return;  // a config var: set_param checks it when the case is built
   std::vector<std::string> ids;
   for (const ResolvedNode& n : base.nodes()) {
     ids.push_back(n.id);

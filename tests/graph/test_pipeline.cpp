@@ -155,6 +155,34 @@ TEST_CASE("variables and --set overrides", "[graph]") {
   REQUIRE_THROWS_WITH(Pipeline::build(parse_config(k, "x.json")), Contains("unknown param `colour`"));
 }
 
+TEST_CASE("config vars: one value that several params follow", "[graph]") {
+  json j = json::parse(R"({"vars":{"size":3,"mode":"b"},
+      "nodes":[{"id":"s","type":"test_source/box","params":{"size":"${size}","mode":"${mode}"}},
+               {"id":"t","type":"test_source/box","params":{"size":"${size}","mode":"x${mode}y"}}]})");
+  // the command-line substitution leaves the config's own vars alone
+  json k = substitute_vars(j, {}, "x.json");
+  PipelineConfig c = parse_config(k, "x.json");
+  CHECK(c.nodes[0].params["size"] == 3);  // typed: a number, not the string "3"
+  CHECK(c.nodes[0].params["mode"] == "b");
+  CHECK(c.nodes[1].params["size"] == 3);
+  CHECK(c.nodes[1].params["mode"] == "xby");
+  apply_override(k, "vars.size=5");
+  c = parse_config(k, "x.json");
+  CHECK(c.nodes[0].params["size"] == 5);
+  CHECK(c.nodes[1].params["size"] == 5);
+  apply_override(k, "t.size=7");  // one param alone still works
+  c = parse_config(k, "x.json");
+  CHECK(c.nodes[0].params["size"] == 5);
+  CHECK(c.nodes[1].params["size"] == 7);
+  REQUIRE_THROWS_WITH(apply_override(k, "vars.colour=1"), Contains("the config has no var `colour`; vars: mode, size"));
+  json bad = json::parse(R"({"vars":{"a":1},"nodes":[{"id":"s","type":"test_source/box","params":{"size":"${b}"}}]})");
+  REQUIRE_THROWS_WITH(parse_config(bad, "x.json"), Contains("`${b}` is not a var of the config; vars: a"));
+  bad = json::parse(R"({"vars":{"a":[1]},"nodes":[{"id":"s","type":"test_source/box"}]})");
+  REQUIRE_THROWS_WITH(parse_config(bad, "x.json"), Contains("vars.a: a number, string or boolean"));
+  bad = json::parse(R"({"nodes":[{"id":"vars","type":"test_source/box"}]})");
+  REQUIRE_THROWS_WITH(parse_config(bad, "x.json"), Contains("`vars` is reserved"));
+}
+
 TEST_CASE("a pipeline runs, independent nodes concurrently, and writes report.json", "[graph]") {
   Pipeline p = build(R"({"nodes":[
       {"id":"src","type":"test_source/box","params":{"size":2}},
