@@ -46,7 +46,8 @@ struct ShapeOptions {
 int run_check(const CheckOptions& o) {
   HexMesh mesh = read_hexmesh(o.mesh);
   SurfaceMesh surface;
-  if (!o.surface.empty()) surface = read_surface(o.surface);
+  // The original as the user has it, defects and all (an open input: one-sided distances).
+  if (!o.surface.empty()) surface = read_surface(o.surface, nullptr, /*keep_defects=*/true);
   QualityParams qp;
   qp.samples = o.samples;
   HexQuality q = hex_quality(mesh, o.surface.empty() ? nullptr : &surface, qp);

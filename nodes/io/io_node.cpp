@@ -52,21 +52,26 @@ std::vector<std::filesystem::path> reader_files(const json& params) {
 }
 
 const bool registered_read_surface = register_node(make_node<ReadSurfaceParams>(
-    "read_surface", "Reads and checks a closed triangle surface (OBJ, OFF, STL, PLY, or shape:NAME)",
+    "read_surface",
+    "Reads a triangle surface (OBJ, OFF, STL, PLY, or shape:NAME); checks it, makes the safe repairs, and passes "
+    "a defective one on to the conditioning with a warning",
     ParamSet<ReadSurfaceParams>().add("path", &ReadSurfaceParams::path, "surface file, or shape:NAME"), {},
     artefact_name<SurfaceMesh>(), [](const ReadSurfaceParams& p, const Inputs&, NodeContext& ctx) {
       require_path(p.path);
       SurfaceReadReport r;
-      SurfaceMesh m = read_surface(p.path, &r);
+      SurfaceMesh m = read_surface(p.path, &r, /*keep_defects=*/true);
       ctx.metrics["vertices"] = r.vertices;
       ctx.metrics["faces"] = r.faces;
       ctx.metrics["welded"] = r.welded;
       ctx.metrics["flipped"] = r.flipped;
       ctx.metrics["genus"] = r.genus;
       ctx.metrics["components"] = r.components;
+      ctx.metrics["defects"] = r.defects;
       for (auto& w : r.warnings) ctx.warn(w);
+      for (auto& d : r.defects)
+        ctx.warn(d + "; passed on as read (a condition_surface node repairs it; tetrahedralize refuses it)");
       return make_artefact(std::move(m));
-    }).with_input_files(reader_files));
+    }).with_input_files(reader_files).with_version("2"));  // 2: defective surfaces passed on
 
 const bool registered_read_tetmesh = register_node(make_node<ReadTetmeshParams>(
     "read_tetmesh", "Reads a tet mesh (Medit .mesh, legacy VTK, Gmsh .msh 2.2/4.1, TetGen .node/.ele)",

@@ -8,6 +8,7 @@
 #include "nodes/io/text_cursor.h"
 #include "nodes/shapes/shapes.h"
 #include "runtime/errors.h"
+#include "runtime/union_find.h"
 
 namespace polyhex {
 
@@ -451,20 +452,18 @@ RawSurface parse_ply(std::string_view data, const std::string& file) {
 // ---------------------------------------------------------------------------------------------
 // Checks and repairs
 
-struct UnionFind {
-  std::vector<int> parent;
-  explicit UnionFind(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  int find(int x) {
-    while (parent[size_t(x)] != x) x = parent[size_t(x)] = parent[size_t(parent[size_t(x)])];
-    return x;
-  }
-  void unite(int a, int b) { parent[size_t(find(a))] = find(b); }
-};
-
 class SurfaceChecker {
  public:
   SurfaceChecker(SurfaceMesh& m, const std::string& name, SurfaceReadReport& r, const std::vector<int>& lines)
       : m_(m), name_(name), r_(r), lines_(lines) {}
+
+  /// Welds exactly duplicate vertices and drops unused ones, checking nothing (a surface passed on
+  /// with its defects).
+  void weld_only() {
+    lenient_ = true;
+    weld("the surface has defects");
+    drop_unused();
+  }
 
   void run(bool always_weld) {
     if (m_.F.rows() == 0) throw InvalidInput(name_ + ": no triangles");
@@ -500,6 +499,7 @@ class SurfaceChecker {
   }
 
   void check_repeated() const {
+    if (lenient_) return;
     for (Eigen::Index f = 0; f < m_.F.rows(); ++f) {
       const int a = m_.F(f, 0), b = m_.F(f, 1), c = m_.F(f, 2);
       if (a == b || b == c || a == c)
@@ -720,7 +720,7 @@ class SurfaceChecker {
   const std::string& name_;
   SurfaceReadReport& r_;
   const std::vector<int>& lines_;
-  bool welded_ = false;
+  bool welded_ = false, lenient_ = false;
   int welded_counted_ = 0;
   std::vector<int> nb_;  // opposite half-edge (3 f + k) of every half-edge
   int boundary_ = 0, nonmanifold_ = 0, example_boundary_ = -1, example_nonmanifold_ = -1;
@@ -743,7 +743,7 @@ void check_and_repair_surface(SurfaceMesh& mesh, const std::string& name, Surfac
   SurfaceChecker(mesh, name, report, face_line).run(always_weld);
 }
 
-SurfaceMesh read_surface(const std::filesystem::path& path, SurfaceReadReport* report) {
+SurfaceMesh read_surface(const std::filesystem::path& path, SurfaceReadReport* report, bool keep_defects) {
   SurfaceReadReport local;
   SurfaceReadReport& r = report ? *report : local;
   r = SurfaceReadReport{};
@@ -767,8 +767,23 @@ SurfaceMesh read_surface(const std::filesystem::path& path, SurfaceReadReport* r
                          " polygons with more than 3 vertices");
   SurfaceMesh m = to_mesh(raw, file);
   if (raw.line.size() * 3 != raw.F.size()) raw.line.clear();
-  check_and_repair_surface(m, file, r, raw.line, ext == ".stl");
-  return m;
+  if (!keep_defects) {
+    check_and_repair_surface(m, file, r, raw.line, ext == ".stl");
+    return m;
+  }
+  SurfaceMesh checked = m;
+  SurfaceReadReport checked_report = r;
+  try {
+    check_and_repair_surface(checked, file, checked_report, raw.line, ext == ".stl");
+    r = std::move(checked_report);
+    return checked;
+  } catch (const InvalidInput& e) {
+    SurfaceChecker(m, file, r, {}).weld_only();
+    r.defects.push_back(e.what());
+    r.vertices = int(m.V.rows());
+    r.faces = int(m.F.rows());
+    return m;
+  }
 }
 
 void write_surface(const SurfaceMesh& mesh, const std::filesystem::path& path, const CellData& cell_data) {

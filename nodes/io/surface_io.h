@@ -28,17 +28,24 @@ struct SurfaceReadReport {
   int components = 0;  ///< connected components (through shared edges)
   int genus = 0;       ///< total genus from the Euler characteristic: (2 components - (V - E + F)) / 2
   std::vector<std::string> warnings;  ///< one line per repair
+  /// With keep_defects: the check that failed (the message read_surface would throw), else empty.
+  std::vector<std::string> defects;
 };
 
 /// Reads a closed triangle surface; the format follows the extension (.obj .off .stl .ply).
 /// A path `shape:NAME` builds the built-in shape `make_shape(ShapeParams{NAME})` instead.
 /// \param report when not null, receives counts and the repair warnings
+/// \param keep_defects instead of throwing InvalidInput for an open, non-manifold, non-orientable or
+///        degenerate surface, return its triangles as read, with exactly duplicate vertices welded
+///        and unused ones dropped, and the check's message in report->defects (for the surface
+///        conditioning, condition_surface.h). Malformed files still throw IOError.
 /// \return the surface, outward oriented, no unused or duplicate vertices; `source` = the path
 /// \throw IOError naming the file (and the line or face) for a missing/unreadable file, an unknown
 ///        extension, a truncated file, wrong counts, a non-finite coordinate or an index out of range
 /// \throw InvalidInput naming the file (and a face) for an open, non-manifold, non-orientable
 ///        surface or a degenerate (repeated-index or zero-area) face
-SurfaceMesh read_surface(const std::filesystem::path& path, SurfaceReadReport* report = nullptr);
+SurfaceMesh read_surface(const std::filesystem::path& path, SurfaceReadReport* report = nullptr,
+                         bool keep_defects = false);
 
 /// Checks and repairs a surface in memory (what read_surface does after parsing).
 /// \param name used in messages (a file name)

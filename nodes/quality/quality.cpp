@@ -300,6 +300,35 @@ SurfaceDistance sampled_surface_distance(const RowMatrixX3d& Va, const RowMatrix
   return d;
 }
 
+namespace {
+
+// How many triangles use each undirected edge: whether some edge has one (an open surface) and
+// whether every edge has two (closed and manifold: the enclosed volume is defined).
+struct EdgeUse {
+  bool open = false, closed_manifold = true;
+};
+EdgeUse edge_use(const RowMatrixX3i& F) {
+  std::vector<uint64_t> edges;
+  edges.reserve(size_t(3 * F.rows()));
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = uint32_t(F(f, k)), b = uint32_t(F(f, (k + 1) % 3));
+      edges.push_back((uint64_t(std::min(a, b)) << 32) | std::max(a, b));
+    }
+  std::sort(edges.begin(), edges.end());
+  EdgeUse u;
+  for (size_t i = 0; i < edges.size();) {
+    size_t j = i;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    u.open = u.open || j - i == 1;
+    u.closed_manifold = u.closed_manifold && j - i == 2;
+    i = j;
+  }
+  return u;
+}
+
+}  // namespace
+
 HexQuality hex_quality(const HexMesh& mesh, const SurfaceMesh* surface, const QualityParams& p) {
   check_hex_mesh(mesh);
   if (p.samples < 1) throw InvalidInput("quality: samples = " + std::to_string(p.samples) + " must be >= 1");
@@ -337,14 +366,23 @@ HexQuality hex_quality(const HexMesh& mesh, const SurfaceMesh* surface, const Qu
     enclosed += a.dot(b.cross(c));
   }
   enclosed = std::abs(enclosed / 6.0);
-  if (!(enclosed > 0)) throw InvalidInput(sname + ": the surface encloses no volume");
-  q.volume_ratio = std::abs(q.volume) / enclosed;
+  const EdgeUse use = edge_use(surface->F);
+  q.surface_closed = !use.open;
+  if (use.closed_manifold) {
+    if (!(enclosed > 0)) throw InvalidInput(sname + ": the surface encloses no volume");
+    q.volume_ratio = std::abs(q.volume) / enclosed;
+  }
 
   // hex boundary -> surface first, then surface -> hex boundary, as hexcheck.py samples them.
   const SurfaceDistance d =
       sampled_surface_distance(mesh.V, quads_to_triangles(t.boundary), surface->V, surface->F, p.samples, p.seed);
-  q.hausdorff_max = std::max(d.max_ab, d.max_ba) / q.bbox_diag;
-  q.hausdorff_mean = (d.mean_ab + d.mean_ba) / 2.0 / q.bbox_diag;
+  if (q.surface_closed) {
+    q.hausdorff_max = std::max(d.max_ab, d.max_ba) / q.bbox_diag;
+    q.hausdorff_mean = (d.mean_ab + d.mean_ba) / 2.0 / q.bbox_diag;
+  } else {
+    q.hausdorff_max = d.max_ba / q.bbox_diag;
+    q.hausdorff_mean = d.mean_ba / q.bbox_diag;
+  }
   return q;
 }
 

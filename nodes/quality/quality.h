@@ -48,7 +48,12 @@ struct HexQuality {
   double bbox_diag = 0;         ///< bounding-box diagonal of the surface
   double hausdorff_mean = 0;    ///< (mean hex->surface + mean surface->hex) / 2 / bbox_diag
   double hausdorff_max = 0;     ///< max over both directions / bbox_diag
-  double volume_ratio = 0;      ///< |volume| / |volume enclosed by the surface|
+  double volume_ratio = 0;      ///< |volume| / |volume enclosed by the surface| (0 unless every edge of
+                                ///< the surface is in exactly two triangles)
+  /// The surface has no edge in just one triangle. Against an open surface (an input with holes,
+  /// measured before its repair) the distances are one-sided, surface -> hex boundary: the hex
+  /// boundary over a hole has no surface to be near.
+  bool surface_closed = true;
   Eigen::VectorXd sj;           ///< #H scaled Jacobian of every hex (centre term included)
   Eigen::VectorXd sj_corner;    ///< #H minimum corner scaled Jacobian of every hex
 };
@@ -100,7 +105,7 @@ SurfaceDistance sampled_surface_distance(const RowMatrixX3d& Va, const RowMatrix
 /// All figures of the mesh, and with a surface the distance and volume figures.
 /// \param surface  the input surface, or null
 /// \throw InvalidInput from check_hex_mesh; when the surface has an index out of range, a non-finite
-///        coordinate, no area or encloses no volume; when p.samples < 1
+///        coordinate, no area, or is closed and manifold and encloses no volume; when p.samples < 1
 HexQuality hex_quality(const HexMesh& mesh, const SurfaceMesh* surface, const QualityParams& p = {});
 
 }  // namespace polyhex

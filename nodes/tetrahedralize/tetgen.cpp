@@ -16,6 +16,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "nodes/io/surface_io.h"
 #include "runtime/errors.h"
 
 namespace polyhex {
@@ -41,6 +42,16 @@ void validate(const SurfaceMesh& s) {
   if (!std::isfinite(diag))
     throw InvalidInput(who + ": coordinates too large: the bounding-box diagonal overflows a double");
   if (!(diag > 0)) throw InvalidInput(who + ": all vertices are at one point (bounding-box diagonal 0)");
+  // TetGen needs a closed, manifold surface: the reader's check (it may arrive unchecked, with defects).
+  SurfaceMesh checked = s;
+  SurfaceReadReport report;
+  try {
+    check_and_repair_surface(checked, who, report);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(std::string(e.what()) +
+                       "; TetGen needs a closed, manifold surface: mesh it through a condition_surface node "
+                       "(configs/default.json has one)");
+  }
 }
 
 std::string short_number(double x) {

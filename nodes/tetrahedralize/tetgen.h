@@ -64,9 +64,10 @@ struct TetgenStats {
 /// \param p        params; edge_length in (0, 0.5]
 /// \param stats    optional, filled with the figures of the result
 /// \return tets T #T by 4, all positively oriented, every vertex used; source = surface.source
-/// \pre surface is closed and does not intersect itself
+/// \pre surface does not intersect itself (else TetGen's own check refuses it, code 3)
 /// \throw InvalidInput for an empty or malformed surface (index out of range, non-finite
-///        coordinates, all vertices at one point), a non-positive edge_length, an estimated size above
+///        coordinates, all vertices at one point), an open, non-manifold or degenerate one (the
+///        surface reader's check, check_and_repair_surface), a non-positive edge_length, an estimated size above
 ///        max_tets or the machine's memory (the message gives the estimate and the smallest edge_length
 ///        that fits), and for every TetGen failure: the message names
 ///        surface.source and the cause (self-intersection, tiny feature, nearly touching facets,
