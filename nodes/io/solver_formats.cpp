@@ -3,6 +3,7 @@
 #include <exodusII.h>
 
 #include <algorithm>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -87,6 +88,10 @@ std::array<int, 6> abaqus_hex_faces() {
 void write_exodus_hex(const HexMesh& mesh, const std::filesystem::path& path) {
   const auto nv = mesh.V.rows(), nh = mesh.H.rows();
   const auto ng = int64_t(mesh.groups.size());
+  // The Exodus library keeps global state (its list of open files, the last error), and two write_hex
+  // nodes of one graph may run at once: one Exodus file at a time.
+  static std::mutex exodus_mutex;
+  const std::lock_guard<std::mutex> lock(exodus_mutex);
   write_file_atomic_by_name(path, [&](const std::filesystem::path& tmp) {
     ExodusFile f(tmp, path);
     const std::string title = "polyhex hex mesh" + (mesh.source.empty() ? std::string() : " of " + mesh.source);

@@ -22,6 +22,7 @@ std::array<int, 6> abaqus_hex_faces();
 /// Writes Exodus II: one element block `volume` (id 1, HEX8) with every hex; per boundary group (in order,
 /// ids 1..) a side set of its faces and a node set of their vertices, both named after the group; coordinate
 /// names x, y, z; double precision. Written under a temporary name in the same folder, then renamed.
+/// Calls from several threads are serialised (the Exodus library is not thread-safe).
 /// \pre the groups pass boundary_groups_problem (write_hexmesh checks)
 /// \throw IOError naming the file and the Exodus call that failed, or as write_file_atomic_by_name
 void write_exodus_hex(const HexMesh& mesh, const std::filesystem::path& path);

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <filesystem>
+#include <thread>
 
 #include "nodes/artefacts/boundary_groups.h"
 #include "nodes/io/hexmesh_io.h"
@@ -94,4 +95,22 @@ TEST_CASE("hex writers: bad groups, unknown formats and failed writes leave no f
   bad.groups[0].faces = {{0, 7}};
   CHECK_THROWS(write_hexmesh(bad, dir / "keep.e"));
   CHECK(read_text(dir / "keep.e") == before);
+}
+
+TEST_CASE("hex writers: Exodus files written from several threads at once are whole", "[io]") {
+  // two write_hex nodes of one graph may run at once; the Exodus library is not thread-safe
+  TempDir dir;
+  const HexMesh m = hex_grid_with_side_groups(3);
+  write_hexmesh(m, dir / "ref.e");
+  const std::string ref = read_text(dir / "ref.e");
+  REQUIRE(ref.size() > 1000);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t)
+    threads.emplace_back([&, t] {
+      for (int k = 0; k < 5; ++k) write_hexmesh(m, dir / ("t" + std::to_string(t) + "_" + std::to_string(k) + ".e"));
+    });
+  for (auto& t : threads) t.join();
+  for (int t = 0; t < 4; ++t)
+    for (int k = 0; k < 5; ++k) CHECK(read_text(dir / ("t" + std::to_string(t) + "_" + std::to_string(k) + ".e")) == ref);
+  CHECK_FALSE(leftovers(dir.path));
 }
