@@ -131,6 +131,15 @@ TEST_CASE("clients: meshio reads the hexes and the boundary groups of every form
     INFO("hex." << ext);
     CHECK(got[ext]["groups"] == ref);
   }
+  // each chart and patch group is one side of the box: its vertices lie within a hex edge (0.2) of one
+  // plane (boundary quads at the box's edges fold across them, so not exactly on it); faces of two sides
+  // would span at least the box's smallest size, 0.4, along every axis
+  for (auto& [name, thickness] : got["msh"]["thickness"].items()) {
+    INFO(name);
+    if (name != "boundary") CHECK(thickness.get<double>() < 0.2);
+  }
+  for (const char* ext : {"e", "inp", "msh", "vtk", "mesh"})
+    CHECK(run.report["nodes"][std::string("write_") + ext]["metrics"]["groups"] == 13);
   // Medit: one reference per face, the chart
   json charts = json::object();
   for (auto& [name, size] : ref.items())

@@ -9,6 +9,8 @@ reads with) and prints what a solver would get, as JSON, for tests/nodes/io/test
   not_boundary    group faces that are not a face of exactly one hex
   inward          group faces whose vertex order turns inward (formats that orient faces)
   outside_nodes   group faces with a node outside the node set of the same name (Exodus, Abaqus)
+  thickness       {name: the smallest extent of the group's vertices along x, y or z} (0 for a planar,
+                  axis-aligned group such as a side of a box)
 
 Where the groups are, per format (meshio 7.0):
   .e    meshio: point_sets (node sets); side sets (not read by meshio) from the file's netCDF variables
@@ -46,7 +48,7 @@ def main(path):
     face_count = Counter(tuple(sorted(h[list(f)])) for h in hexes for f in HEX_FACES)
     hex_of_face = {tuple(sorted(h[list(f)])): i for i, h in enumerate(hexes) for f in HEX_FACES}
     out = {"hexes": int(len(hexes)), "min_jacobian": float(jac), "groups": {}, "node_sets": {}, "cell_sets": {},
-           "not_boundary": 0, "inward": 0, "outside_nodes": 0}
+           "not_boundary": 0, "inward": 0, "outside_nodes": 0, "thickness": {}}
     faces = {}  # group name -> list of faces as node tuples (oriented where the format orients them)
     oriented = True
     ext = path.rsplit(".", 1)[-1]
@@ -97,6 +99,8 @@ def main(path):
         out["cell_sets"][name] = int(sum(len(b) for b in blocks if b is not None))
     for name, fs in faces.items():
         out["groups"][name] = len(fs)
+        xyz = P[sorted({v for f in fs for v in f})]
+        out["thickness"][name] = float((xyz.max(axis=0) - xyz.min(axis=0)).min())
         if ext == "msh":
             out["node_sets"][name] = len({v for f in fs for v in f})
         node_set = set(mesh.point_sets[name].tolist()) if name in mesh.point_sets else None
