@@ -176,14 +176,15 @@ TEST_CASE("clients: gmsh opens the .msh and writes it back with the hexes and th
   CHECK(after["inward"] == 0);
 }
 
-TEST_CASE("clients: meshio finds every Exodus side and Abaqus face number on a grid's six sides", "[io][clients]") {
+TEST_CASE("clients: meshio finds every Exodus side, Abaqus face and quad of a grid's six sides", "[io][clients]") {
   if (!meshio_available()) return;
   // a 3 x 3 x 3 grid: its boundary faces use all six local faces, one side of the grid each
   const polyhex::HexMesh m = polyhex::iotest::hex_grid_with_side_groups(3);
   polyhex::iotest::TempDir dir;
-  for (const char* name : {"grid.e", "grid.inp"}) {
+  // (and the binary VTK writer, which the pipeline runs do not use, with the same groups)
+  for (const char* name : {"grid.e", "grid.inp", "grid.msh", "grid.vtk"}) {
     INFO(name);
-    polyhex::write_hexmesh(m, dir / name);
+    polyhex::write_hexmesh(m, dir / name, std::string(name) == "grid.vtk" ? "vtk_binary" : "auto");
     const json r = read_back(dir / name);
     CHECK(r["hexes"] == 27);
     CHECK(r["min_jacobian"].get<double>() > 0);
@@ -195,7 +196,7 @@ TEST_CASE("clients: meshio finds every Exodus side and Abaqus face number on a g
     CHECK(r["groups"]["boundary"] == 54);
     for (int s = 0; s < 6; ++s) {
       CHECK(r["groups"]["side_" + std::to_string(s)] == 9);
-      CHECK(r["node_sets"]["side_" + std::to_string(s)] == 16);
+      if (std::string(name) != "grid.vtk") CHECK(r["node_sets"]["side_" + std::to_string(s)] == 16);
     }
   }
 }
