@@ -17,10 +17,8 @@ namespace {
 /// The reason of the last failed system call, e.g. "No space left on device"; "" when errno is 0.
 std::string reason(int err) { return err != 0 ? std::string(": ") + std::strerror(err) : std::string(); }
 
-}  // namespace
-
-void write_file_atomic(const std::filesystem::path& path, const std::function<void(std::ostream&)>& fill,
-                       bool binary) {
+/// Checks that `path` can be a file and returns a fresh temporary name beside it.
+std::filesystem::path temporary_name(const std::filesystem::path& path) {
   static std::atomic<unsigned> counter{0};
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
@@ -30,6 +28,42 @@ void write_file_atomic(const std::filesystem::path& path, const std::function<vo
     throw IOError(path.string() + ": cannot write the file: " + parent.string() + " is a file, not a folder");
   std::filesystem::path tmp = path;
   tmp += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
+  return tmp;
+}
+
+/// Renames tmp to path; on failure removes tmp. \throw IOError
+void rename_into_place(const std::filesystem::path& tmp, const std::filesystem::path& path) {
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::error_code e;
+    std::filesystem::remove(tmp, e);
+    throw IOError(path.string() + ": cannot rename the temporary file into place: " + ec.message());
+  }
+}
+
+}  // namespace
+
+void write_file_atomic_by_name(const std::filesystem::path& path,
+                               const std::function<void(const std::filesystem::path& tmp)>& write) {
+  const std::filesystem::path tmp = temporary_name(path);
+  std::error_code ec;
+  try {
+    write(tmp);
+  } catch (...) {
+    std::filesystem::remove(tmp, ec);
+    throw;
+  }
+  if (!std::filesystem::is_regular_file(tmp, ec)) {
+    std::filesystem::remove(tmp, ec);
+    throw IOError(path.string() + ": the writer left no file; no file written");
+  }
+  rename_into_place(tmp, path);
+}
+
+void write_file_atomic(const std::filesystem::path& path, const std::function<void(std::ostream&)>& fill,
+                       bool binary) {
+  const std::filesystem::path tmp = temporary_name(path);
   auto cleanup = [&] {
     std::error_code e;
     std::filesystem::remove(tmp, e);
@@ -70,11 +104,7 @@ void write_file_atomic(const std::filesystem::path& path, const std::function<vo
                     "; no file written");
     }
   }
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    cleanup();
-    throw IOError(path.string() + ": cannot rename the temporary file into place: " + ec.message());
-  }
+  rename_into_place(tmp, path);
 }
 
 }  // namespace polyhex

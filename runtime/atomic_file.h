@@ -21,4 +21,12 @@ namespace polyhex {
 void write_file_atomic(const std::filesystem::path& path, const std::function<void(std::ostream&)>& fill,
                        bool binary = false);
 
+/// The same for a library that writes a file by name (the Exodus II library): calls `write` with the
+/// temporary name `path.tmp.<pid>.<n>` in the same folder, then renames that file into place. When `write`
+/// throws or leaves no file, no file is left under `path` (an existing one is kept) nor under the
+/// temporary name.
+/// \throw IOError naming `path` as write_file_atomic; exceptions thrown by `write` are rethrown after the clean-up
+void write_file_atomic_by_name(const std::filesystem::path& path,
+                               const std::function<void(const std::filesystem::path& tmp)>& write);
+
 }  // namespace polyhex

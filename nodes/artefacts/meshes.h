@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>  // cross products everywhere meshes are used
+#include <array>
 #include <string>
 #include <vector>
 
@@ -32,12 +33,25 @@ struct TetMesh {
   std::string source;
 };
 
+/// A named set of boundary faces of a hex mesh, to put boundary conditions on: a side set and the node
+/// set of its faces' vertices in Exodus II, a surface and a node set in Abaqus, a physical group in Gmsh.
+/// Groups of one family do not overlap (a face is in at most one chart), groups of different families do.
+struct BoundaryGroup {
+  std::string name;    ///< unique in the mesh, letters, digits and '_', starting with a letter (every format's rule), e.g. "chart_3"
+  std::string family;  ///< what the group stands for: "boundary", "chart", "patch"; formats with one reference per face (Medit) or one array per family (VTK) use it
+  int id = 0;          ///< number of the group within its family (the chart id, the patch id; 0 for "boundary"), >= 0
+  std::vector<std::array<int, 2>> faces;  ///< (hex, local face 0..5 of hex_topology::kFaces), sorted, each a boundary face
+};
+
 /// An all-hex mesh. One vertex order everywhere, VTK_HEXAHEDRON: bottom face 0-1-2-3, top face
 /// 4-5-6-7 above it (4 over 0), (p1-p0) x (p3-p0) . (p4-p0) > 0 for a valid hex.
 struct HexMesh {
   RowMatrixX3d V;   ///< #V by 3 vertex positions
   RowMatrixX8i H;   ///< #H by 8 hexahedra, VTK_HEXAHEDRON order
   std::string source;
+  /// Optional boundary groups (the boundary_groups node); they refer to H, so a node that changes H
+  /// drops them (a default-constructed or copied-then-rebuilt mesh has none).
+  std::vector<BoundaryGroup> groups;
 };
 
 }  // namespace polyhex

@@ -6,6 +6,7 @@
 #include <type_traits>
 
 #include "graph/node.h"
+#include "nodes/artefacts/boundary_groups.h"
 
 namespace polyhex {
 namespace {
@@ -156,6 +157,31 @@ M read_mesh(Reader& r, Cells M::*cells) {
   return m;
 }
 
+// A HexMesh: the mesh layout, then its boundary groups (name, family, id, (hex, face) pairs).
+void write_hex(Writer& w, const HexMesh& m) {
+  write_mesh(w, m, m.H);
+  w.count(m.groups.size());
+  for (const BoundaryGroup& g : m.groups) {
+    w.str(g.name);
+    w.str(g.family);
+    w.pod(std::int32_t(g.id));
+    w.vec(g.faces);
+  }
+}
+
+HexMesh read_hex(Reader& r) {
+  HexMesh m = read_mesh(r, &HexMesh::H);
+  m.groups.resize(r.count(28));  // smallest group record: 8 + 8 + 4 + 8 bytes
+  for (BoundaryGroup& g : m.groups) {
+    g.name = r.str();
+    g.family = r.str();
+    g.id = r.pod<std::int32_t>();
+    g.faces = r.vec<std::array<int, 2>>();
+  }
+  if (const std::string problem = boundary_groups_problem(m); !problem.empty()) r.fail(problem);
+  return m;
+}
+
 void write_segmentation(Writer& w, const PolyCubeSegmentation& s) {
   w.matrix(s.F);
   w.matrix(s.chart);
@@ -297,7 +323,7 @@ void write_binary(std::ostream& out, const TetMesh& m) {
 }
 void write_binary(std::ostream& out, const HexMesh& m) {
   Writer w(out);
-  write_mesh(w, m, m.H);
+  write_hex(w, m);
 }
 void write_binary(std::ostream& out, const PolyCubeSegmentation& s) {
   Writer w(out);
@@ -315,7 +341,7 @@ TetMesh read_tetmesh_binary(std::istream& in) {
   return read_all(in, "TetMesh", [](Reader& r) { return read_mesh(r, &TetMesh::T); });
 }
 HexMesh read_hexmesh_binary(std::istream& in) {
-  return read_all(in, "HexMesh", [](Reader& r) { return read_mesh(r, &HexMesh::H); });
+  return read_all(in, "HexMesh", read_hex);
 }
 PolyCubeSegmentation read_segmentation_binary(std::istream& in) {
   return read_all(in, "PolyCubeSegmentation", read_segmentation);

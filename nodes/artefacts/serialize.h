@@ -5,9 +5,11 @@
 /// The payload is little-endian raw data, no padding: strings and arrays are a u64 count followed by
 /// the elements; matrices are u64 rows followed by rows x cols elements in row-major order (doubles as
 /// IEEE-754 bit patterns, so a round trip is exact). A PolyCubeMap holds its input TetMesh and
-/// segmentation inline (a u8 presence flag, then the artefact). The codecs register themselves with
-/// `Registry::add_codec` at static initialisation; `kCodecVersion` is their `ArtefactCodec::version`:
-/// bump it when a layout changes, older cache entries are then ignored and recomputed.
+/// segmentation inline (a u8 presence flag, then the artefact). A HexMesh is followed by its boundary
+/// groups (u64 count; per group name, family, i32 id, then its (hex, face) pairs as an array of i32
+/// pairs). The codecs register themselves with `Registry::add_codec` at static initialisation;
+/// `kCodecVersion` is their `ArtefactCodec::version`: bump it when a layout changes, older cache entries
+/// are then ignored and recomputed.
 #pragma once
 
 #include <cstdint>
@@ -20,7 +22,7 @@
 namespace polyhex {
 
 /// Format version of every payload below (ArtefactCodec::version).
-constexpr std::uint32_t kCodecVersion = 4;
+constexpr std::uint32_t kCodecVersion = 5;
 
 /// Writes the payload of one artefact. \throw IOError when the stream fails
 void write_binary(std::ostream& out, const SurfaceMesh& m);

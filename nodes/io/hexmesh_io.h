@@ -1,8 +1,13 @@
 /// @file hexmesh_io.h
 /// @brief Writing and reading all-hex meshes: legacy VTK ASCII 2.0 / BINARY (cell type 12, classic
 /// CELLS, as HexaLab and ../shared/tools/hexcheck.py read), Medit `.mesh` (`Hexahedra`), Gmsh
-/// `.msh` 4.1 (element type 5). Medit and Gmsh list hex vertices in VTK_HEXAHEDRON order, so
-/// rows are written as they are.
+/// `.msh` 4.1 (element type 5), and for writing Exodus II and Abaqus `.inp` (solver_formats.h). Every
+/// one of them lists hex vertices in VTK_HEXAHEDRON order, so rows are written as they are.
+///
+/// A mesh's boundary groups are written by every format: Exodus side sets + node sets, Abaqus *SURFACE +
+/// *NSET, Gmsh physical groups (quads on surface entities, the hexes in the physical group `volume`),
+/// VTK quad cells with one int cell array per group family, Medit Quadrilaterals with one reference
+/// (mesh_formats.h says which).
 #pragma once
 
 #include <filesystem>
@@ -14,9 +19,16 @@
 
 namespace polyhex {
 
-/// Writes a hex mesh. `format`: "auto" (by extension .vtk -> VTK ASCII, .mesh, .msh), "vtk",
-/// "vtk_binary", "mesh", "msh". `cell_data` (one value per hex) is written by the VTK formats only.
-/// \throw IOError naming the file (unknown extension, failed write); ConfigError for a bad format
+/// The boundary faces of a mesh's groups, each once, with the groups as rows of them (for the writers of
+/// mesh_formats.h). Rows are in (hex, face) order. \pre boundary_groups_problem(mesh) is empty
+FaceGroups face_groups(const HexMesh& mesh);
+
+/// Writes a hex mesh with its boundary groups. `format`: "auto" (by extension .vtk -> VTK ASCII, .mesh,
+/// .msh, .e / .exo -> Exodus II, .inp -> Abaqus), "vtk", "vtk_binary", "mesh", "msh", "exodus", "abaqus".
+/// `cell_data` (one value per hex) is written by the VTK formats only.
+/// \throw IOError naming the file (unknown extension, failed write); ConfigError for a bad format;
+///        InvalidInput naming the file when the groups are inconsistent (boundary_groups_problem); in every
+///        case no file is written
 void write_hexmesh(const HexMesh& mesh, const std::filesystem::path& path, const std::string& format = "auto",
                    const CellData& cell_data = {});
 

@@ -2,6 +2,7 @@
 // write_tetmesh) and the --save-all savers of SurfaceMesh, TetMesh and HexMesh.
 #include <filesystem>
 #include <memory>
+#include <type_traits>
 
 #include "graph/node.h"
 #include "nodes/io/hexmesh_io.h"
@@ -19,7 +20,7 @@ struct ReadTetmeshParams {
 };
 struct WriteHexParams {
   std::string path = "hex.vtk";  ///< output file; a relative path is relative to the output folder
-  std::string format = "auto";   ///< auto (by extension) | vtk | vtk_binary | mesh | msh
+  std::string format = "auto";   ///< auto (by extension) | vtk | vtk_binary | mesh | msh | exodus | abaqus
 };
 struct WriteTetmeshParams {
   std::string path = "tets.vtk";  ///< output file; a relative path is relative to the output folder
@@ -27,6 +28,7 @@ struct WriteTetmeshParams {
 };
 
 const std::vector<std::string> kFormats = {"auto", "vtk", "vtk_binary", "mesh", "msh"};
+const std::vector<std::string> kHexFormats = {"auto", "vtk", "vtk_binary", "mesh", "msh", "exodus", "abaqus"};
 
 void require_path(const std::string& path) {
   if (path.empty()) throw InvalidInput("param `path` is empty: give a mesh file (or shape:NAME for a surface)");
@@ -89,25 +91,35 @@ const bool registered_read_tetmesh = register_node(make_node<ReadTetmeshParams>(
 
 // write_hex and write_tetmesh: the same sink for a mesh type M written by `write`.
 template <class M, class P>
-NodeSpec writer_node(const std::string& type, const std::string& what,
+NodeSpec writer_node(const std::string& type, const std::string& what, const std::vector<std::string>& formats,
+                     const std::string& formats_text,
                      void (*write)(const M&, const std::filesystem::path&, const std::string&, const CellData&)) {
+  std::string choices;
+  for (const auto& f : formats) choices += (choices.empty() ? "" : ", ") + (f == "auto" ? "auto (by extension)" : f);
   return make_node<P>(
-      type, "Writes the " + what + " mesh (legacy VTK ASCII/binary, Medit .mesh, Gmsh .msh 4.1)",
+      type, "Writes the " + what + " mesh (" + formats_text + ")",
       ParamSet<P>()
           .add("path", &P::path, "output file, relative to the output folder")
-          .add_choice("format", &P::format, kFormats, "auto (by extension), vtk, vtk_binary, mesh, msh"),
+          .add_choice("format", &P::format, formats, choices),
       {{"mesh", artefact_name<M>()}}, "", [write](const P& p, const Inputs& in, NodeContext& ctx) {
         const auto out = output_path(p.path, ctx);
-        write(*in.get<M>(0), out, p.format, CellData{});
+        const auto mesh = in.get<M>(0);
+        write(*mesh, out, p.format, CellData{});
         ctx.metrics["path"] = out.string();
         ctx.metrics["bytes"] = std::filesystem::file_size(out);
+        if constexpr (std::is_same_v<M, HexMesh>) ctx.metrics["groups"] = mesh->groups.size();
         return Artefact{};
       });
 }
 
-const bool registered_write_hex = register_node(writer_node<HexMesh, WriteHexParams>("write_hex", "hex", &write_hexmesh));
+const bool registered_write_hex = register_node(writer_node<HexMesh, WriteHexParams>(
+    "write_hex", "hex", kHexFormats,
+    "legacy VTK ASCII/binary, Medit .mesh, Gmsh .msh 4.1, Exodus II .e/.exo, Abaqus .inp; with its boundary groups",
+    &write_hexmesh));
 const bool registered_write_tetmesh =
-    register_node(writer_node<TetMesh, WriteTetmeshParams>("write_tetmesh", "tet", &write_tetmesh));
+    register_node(writer_node<TetMesh, WriteTetmeshParams>("write_tetmesh", "tet", kFormats,
+                                                           "legacy VTK ASCII/binary, Medit .mesh, Gmsh .msh 4.1",
+                                                           &write_tetmesh));
 
 const bool registered_savers = [] {
   auto& reg = Registry::instance();

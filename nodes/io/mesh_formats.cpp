@@ -18,18 +18,39 @@ using io_detail::append_int;
 using io_detail::BinaryCursor;
 using io_detail::TextCursor;
 
-MeshFormat choose_mesh_format(const std::string& format, const std::filesystem::path& path) {
+MeshFormat choose_mesh_format(const std::string& format, const std::filesystem::path& path, bool solver_formats) {
   if (format == "vtk") return MeshFormat::VtkAscii;
   if (format == "vtk_binary") return MeshFormat::VtkBinary;
   if (format == "mesh") return MeshFormat::Medit;
   if (format == "msh") return MeshFormat::Gmsh;
+  if (solver_formats && format == "exodus") return MeshFormat::Exodus;
+  if (solver_formats && format == "abaqus") return MeshFormat::Abaqus;
   if (format != "auto")
-    throw ConfigError("unknown mesh format `" + format + "`; valid formats: auto, vtk, vtk_binary, mesh, msh");
+    throw ConfigError("unknown mesh format `" + format + "`; valid formats: auto, vtk, vtk_binary, mesh, msh" +
+                      (solver_formats ? ", exodus, abaqus" : ""));
   const std::string ext = io_detail::lower_extension(path);
   if (ext == ".vtk") return MeshFormat::VtkAscii;
   if (ext == ".mesh") return MeshFormat::Medit;
   if (ext == ".msh") return MeshFormat::Gmsh;
-  throw IOError(path.string() + ": unknown extension `" + ext + "` (expected .vtk, .mesh or .msh)");
+  if (solver_formats && (ext == ".e" || ext == ".exo")) return MeshFormat::Exodus;
+  if (solver_formats && ext == ".inp") return MeshFormat::Abaqus;
+  throw IOError(path.string() + ": unknown extension `" + ext + "` (expected .vtk, .mesh" +
+                (solver_formats ? ", .msh, .e, .exo or .inp)" : " or .msh)"));
+}
+
+std::vector<std::string> FaceGroups::families() const {
+  std::vector<std::string> out;
+  for (const Group& g : groups)
+    if (std::find(out.begin(), out.end(), g.family) == out.end()) out.push_back(g.family);
+  return out;
+}
+
+std::vector<int> FaceGroups::family_ids(const std::string& family) const {
+  std::vector<int> id(size_t(quads.rows()), -1);
+  for (const Group& g : groups)
+    if (g.family == family)
+      for (int r : g.rows) id[size_t(r)] = g.id;
+  return id;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -65,7 +86,6 @@ void append_vtk_points(std::string& out, const RowMatrixX3d& V, bool binary) {
   if (binary) out += '\n';
 }
 
-namespace {
 void check_array_name(const std::string& name, size_t size, Eigen::Index cells, const std::string& file) {
   if (name.empty() || name.find_first_of(" \t\n") != std::string::npos)
     throw InvalidInput(file + ": cell data name `" + name + "` must be one word");
@@ -73,7 +93,6 @@ void check_array_name(const std::string& name, size_t size, Eigen::Index cells, 
     throw InvalidInput(file + ": cell data `" + name + "` has " + std::to_string(size) + " values for " +
                        std::to_string(cells) + " cells");
 }
-}  // namespace
 
 namespace {
 template <class T>
@@ -105,45 +124,75 @@ void append_vtk_cell_data(std::string& out, const CellData& data, Eigen::Index c
 
 }  // namespace io_detail
 
+namespace {
+// Appends one cell (`n` indices) to a legacy VTK CELLS block.
+void append_vtk_cell(std::string& out, const int* row, int n, bool binary) {
+  if (binary) {
+    append_big_endian<int32_t>(out, n);
+    for (int k = 0; k < n; ++k) append_big_endian<int32_t>(out, row[k]);
+  } else {
+    append_int(out, n);
+    for (int k = 0; k < n; ++k) {
+      out += ' ';
+      append_int(out, row[k]);
+    }
+    out += '\n';
+  }
+}
+}  // namespace
+
 void write_vtk_cells(const std::filesystem::path& path, const RowMatrixX3d& V, CellBlock cells, int vtk_type,
-                     bool binary, const CellData& cell_data) {
+                     bool binary, const CellData& cell_data, const FaceGroups& faces) {
+  constexpr int kVtkQuad = 9;
   std::string out;
-  out.reserve(size_t(V.rows()) * 60 + size_t(cells.rows) * (cells.cols + 2) * 8 + 256);
+  const Eigen::Index nq = faces.empty() ? 0 : faces.quads.rows();
+  out.reserve(size_t(V.rows()) * 60 + size_t(cells.rows) * (cells.cols + 2) * 8 + size_t(nq) * 48 + 256);
   io_detail::append_vtk_header(out, "polyhex mesh", binary, "UNSTRUCTURED_GRID");
   io_detail::append_vtk_points(out, V, binary);
   const Eigen::Index n = cells.rows;
-  out += "CELLS " + std::to_string(n) + " " + std::to_string(n * (cells.cols + 1)) + "\n";
-  for (Eigen::Index c = 0; c < n; ++c) {
-    const int* row = cells.data + c * cells.cols;
+  out += "CELLS " + std::to_string(n + nq) + " " + std::to_string(n * (cells.cols + 1) + nq * 5) + "\n";
+  for (Eigen::Index c = 0; c < n; ++c) append_vtk_cell(out, cells.data + c * cells.cols, cells.cols, binary);
+  for (Eigen::Index q = 0; q < nq; ++q) append_vtk_cell(out, faces.quads.row(q).data(), 4, binary);
+  if (binary) out += '\n';
+  out += "CELL_TYPES " + std::to_string(n + nq) + "\n";
+  for (Eigen::Index c = 0; c < n + nq; ++c) {
+    const int type = c < n ? vtk_type : kVtkQuad;
     if (binary) {
-      append_big_endian<int32_t>(out, cells.cols);
-      for (int k = 0; k < cells.cols; ++k) append_big_endian<int32_t>(out, row[k]);
+      append_big_endian<int32_t>(out, type);
     } else {
-      append_int(out, cells.cols);
-      for (int k = 0; k < cells.cols; ++k) {
-        out += ' ';
-        append_int(out, row[k]);
-      }
+      append_int(out, type);
       out += '\n';
     }
   }
   if (binary) out += '\n';
-  out += "CELL_TYPES " + std::to_string(n) + "\n";
-  for (Eigen::Index c = 0; c < n; ++c) {
-    if (binary) {
-      append_big_endian<int32_t>(out, vtk_type);
-    } else {
-      append_int(out, vtk_type);
-      out += '\n';
+  if (nq == 0) {
+    io_detail::append_vtk_cell_data(out, cell_data, n, binary, path.string());
+  } else {
+    // Every array covers the volume cells and the quads.
+    CellData all;
+    for (auto [name, values] : cell_data.ints) {
+      io_detail::check_array_name(name, values.size(), n, path.string());
+      values.resize(size_t(n + nq), -1);
+      all.ints.emplace_back(name, std::move(values));
     }
+    for (auto [name, values] : cell_data.reals) {
+      io_detail::check_array_name(name, values.size(), n, path.string());
+      values.resize(size_t(n + nq), 0.0);
+      all.reals.emplace_back(name, std::move(values));
+    }
+    for (const std::string& family : faces.families()) {
+      std::vector<int> id(size_t(n), -1);
+      const std::vector<int> quad_id = faces.family_ids(family);
+      id.insert(id.end(), quad_id.begin(), quad_id.end());
+      all.ints.emplace_back(family, std::move(id));
+    }
+    io_detail::append_vtk_cell_data(out, all, n + nq, binary, path.string());
   }
-  if (binary) out += '\n';
-  io_detail::append_vtk_cell_data(out, cell_data, n, binary, path.string());
   io_detail::write_buffer(path, out, binary);
 }
 
 void write_medit_cells(const std::filesystem::path& path, const RowMatrixX3d& V, CellBlock cells,
-                       const std::string& section) {
+                       const std::string& section, const FaceGroups& faces) {
   std::string out;
   out.reserve(size_t(V.rows()) * 60 + size_t(cells.rows) * (cells.cols + 1) * 8 + 256);
   out += "MeshVersionFormatted 2\n\nDimension 3\n\nVertices\n" + std::to_string(V.rows()) + "\n";
@@ -163,26 +212,97 @@ void write_medit_cells(const std::filesystem::path& path, const RowMatrixX3d& V,
     }
     out += "0\n";
   }
+  if (!faces.empty()) {
+    // One reference per face: the first family that is not the whole boundary, else the first.
+    const std::vector<std::string> families = faces.families();
+    std::string family = families.front();
+    for (const std::string& f : families)
+      if (f != "boundary") {
+        family = f;
+        break;
+      }
+    const std::vector<int> ref = faces.family_ids(family);
+    out += "\nQuadrilaterals\n" + std::to_string(faces.quads.rows()) + "\n";
+    for (Eigen::Index q = 0; q < faces.quads.rows(); ++q) {
+      for (int k = 0; k < 4; ++k) {
+        append_int(out, faces.quads(q, k) + 1);
+        out += ' ';
+      }
+      append_int(out, ref[size_t(q)]);
+      out += '\n';
+    }
+  }
   out += "\nEnd\n";
   io_detail::write_buffer(path, out, false);
 }
 
-void write_gmsh_cells(const std::filesystem::path& path, const RowMatrixX3d& V, CellBlock cells, int gmsh_type) {
+namespace {
+// " xmin ymin zmin xmax ymax zmax" of the vertices `ids` (all of V when null), for a Gmsh entity.
+void append_gmsh_box(std::string& out, const RowMatrixX3d& V, const std::vector<int>* ids) {
+  Eigen::Vector3d lo = Eigen::Vector3d::Zero(), hi = Eigen::Vector3d::Zero();
+  if (ids && !ids->empty()) {
+    lo = hi = V.row((*ids)[0]).transpose();
+    for (int v : *ids) {
+      lo = lo.cwiseMin(V.row(v).transpose());
+      hi = hi.cwiseMax(V.row(v).transpose());
+    }
+  } else if (!ids && V.rows() > 0) {
+    lo = V.colwise().minCoeff().transpose();
+    hi = V.colwise().maxCoeff().transpose();
+  }
+  for (int k = 0; k < 3; ++k) {
+    out += ' ';
+    append_double(out, lo[k]);
+  }
+  for (int k = 0; k < 3; ++k) {
+    out += ' ';
+    append_double(out, hi[k]);
+  }
+}
+}  // namespace
+
+void write_gmsh_cells(const std::filesystem::path& path, const RowMatrixX3d& V, CellBlock cells, int gmsh_type,
+                      const FaceGroups& faces) {
+  constexpr int kGmshQuad = 3;
+  const Eigen::Index nq = faces.empty() ? 0 : faces.quads.rows();
+  // Surface entities: one per distinct set of groups holding a quad (quads in no group are left out).
+  std::vector<std::vector<int>> groups_of(static_cast<size_t>(nq));
+  for (size_t g = 0; g < faces.groups.size(); ++g)
+    for (int r : faces.groups[g].rows) groups_of[size_t(r)].push_back(int(g) + 1);  // physical tags 1..
+  std::map<std::vector<int>, std::vector<int>> entity_quads;  // physical tags -> quad rows
+  for (Eigen::Index q = 0; q < nq; ++q)
+    if (!groups_of[size_t(q)].empty()) entity_quads[groups_of[size_t(q)]].push_back(int(q));
+  long quads_written = 0;
+  for (auto& [tags, rows] : entity_quads) quads_written += long(rows.size());
+
   std::string out;
-  out.reserve(size_t(V.rows()) * 70 + size_t(cells.rows) * (cells.cols + 1) * 8 + 512);
+  out.reserve(size_t(V.rows()) * 70 + size_t(cells.rows) * (cells.cols + 1) * 8 + size_t(nq) * 40 + 512);
   const std::string nv = std::to_string(V.rows()), nc = std::to_string(cells.rows);
   out += "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n";
-  // One volume entity (tag 1) holding every node and element: Gmsh needs the entity for its blocks.
-  out += "$Entities\n0 0 0 1\n1";
-  for (int k = 0; k < 3; ++k) {
-    out += ' ';
-    append_double(out, V.rows() ? V.col(k).minCoeff() : 0.0);
+  const bool groups = !faces.empty();
+  if (groups) {
+    out += "$PhysicalNames\n" + std::to_string(faces.groups.size() + 1) + "\n3 1 \"volume\"\n";
+    for (size_t g = 0; g < faces.groups.size(); ++g)
+      out += "2 " + std::to_string(g + 1) + " \"" + faces.groups[g].name + "\"\n";
+    out += "$EndPhysicalNames\n";
   }
-  for (int k = 0; k < 3; ++k) {
-    out += ' ';
-    append_double(out, V.rows() ? V.col(k).maxCoeff() : 0.0);
+  // One volume entity (tag 1) holding every node and volume element: Gmsh needs the entity for its
+  // blocks. Surface entities 1.. hold the quads.
+  out += "$Entities\n0 0 " + std::to_string(entity_quads.size()) + " 1\n";
+  int entity = 0;
+  for (auto& [tags, rows] : entity_quads) {
+    std::vector<int> ids;
+    for (int r : rows)
+      for (int k = 0; k < 4; ++k) ids.push_back(faces.quads(r, k));
+    out += std::to_string(++entity);
+    append_gmsh_box(out, V, &ids);
+    out += " " + std::to_string(tags.size());
+    for (int t : tags) out += " " + std::to_string(t);
+    out += " 0\n";
   }
-  out += " 0 0\n$EndEntities\n";
+  out += "1";
+  append_gmsh_box(out, V, nullptr);
+  out += groups ? " 1 1 0\n$EndEntities\n" : " 0 0\n$EndEntities\n";
   out += "$Nodes\n1 " + nv + " 1 " + nv + "\n3 1 0 " + nv + "\n";
   for (Eigen::Index i = 0; i < V.rows(); ++i) {
     append_int(out, i + 1);
@@ -195,7 +315,9 @@ void write_gmsh_cells(const std::filesystem::path& path, const RowMatrixX3d& V, 
     }
     out += '\n';
   }
-  out += "$EndNodes\n$Elements\n1 " + nc + " 1 " + nc + "\n3 1 " + std::to_string(gmsh_type) + " " + nc + "\n";
+  const long total = long(cells.rows) + quads_written;
+  out += "$EndNodes\n$Elements\n" + std::to_string(1 + entity_quads.size()) + " " + std::to_string(total) + " 1 " +
+         std::to_string(total) + "\n3 1 " + std::to_string(gmsh_type) + " " + nc + "\n";
   for (Eigen::Index c = 0; c < cells.rows; ++c) {
     const int* row = cells.data + c * cells.cols;
     append_int(out, c + 1);
@@ -204,6 +326,19 @@ void write_gmsh_cells(const std::filesystem::path& path, const RowMatrixX3d& V, 
       append_int(out, row[k] + 1);
     }
     out += '\n';
+  }
+  long tag = long(cells.rows);
+  entity = 0;
+  for (auto& [tags, rows] : entity_quads) {
+    out += "2 " + std::to_string(++entity) + " " + std::to_string(kGmshQuad) + " " + std::to_string(rows.size()) + "\n";
+    for (int r : rows) {
+      append_int(out, ++tag);
+      for (int k = 0; k < 4; ++k) {
+        out += ' ';
+        append_int(out, faces.quads(r, k) + 1);
+      }
+      out += '\n';
+    }
   }
   out += "$EndElements\n";
   io_detail::write_buffer(path, out, false);
@@ -619,12 +754,14 @@ CellsRead read_gmsh_cells(const std::filesystem::path& path, int gmsh_type, int 
 }
 
 void write_cell_mesh(const std::filesystem::path& path, const RowMatrixX3d& V, CellBlock cells, const CellKind& kind,
-                     const std::string& format, const CellData& cell_data) {
+                     const std::string& format, const CellData& cell_data, const FaceGroups& faces) {
   switch (choose_mesh_format(format, path)) {
-    case MeshFormat::VtkAscii: return write_vtk_cells(path, V, cells, kind.vtk_type, false, cell_data);
-    case MeshFormat::VtkBinary: return write_vtk_cells(path, V, cells, kind.vtk_type, true, cell_data);
-    case MeshFormat::Medit: return write_medit_cells(path, V, cells, kind.medit_section);
-    case MeshFormat::Gmsh: return write_gmsh_cells(path, V, cells, kind.gmsh_type);
+    case MeshFormat::VtkAscii: return write_vtk_cells(path, V, cells, kind.vtk_type, false, cell_data, faces);
+    case MeshFormat::VtkBinary: return write_vtk_cells(path, V, cells, kind.vtk_type, true, cell_data, faces);
+    case MeshFormat::Medit: return write_medit_cells(path, V, cells, kind.medit_section, faces);
+    case MeshFormat::Gmsh: return write_gmsh_cells(path, V, cells, kind.gmsh_type, faces);
+    case MeshFormat::Exodus:
+    case MeshFormat::Abaqus: break;  // not chosen without solver_formats
   }
 }
 

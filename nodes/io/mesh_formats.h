@@ -25,14 +25,34 @@ struct CellData {
   bool empty() const { return ints.empty() && reals.empty(); }
 };
 
-/// Volume mesh output formats.
-enum class MeshFormat { VtkAscii, VtkBinary, Medit, Gmsh };
+/// Boundary faces written beside the cells, with the named groups they belong to (a hex mesh's boundary
+/// groups, hexmesh_io.h). Each face is written once, however many groups hold it.
+struct FaceGroups {
+  RowMatrixX4i quads;  ///< #Q by 4 vertex indices, outward (counter-clockwise seen from outside)
+  struct Group {
+    std::string name;       ///< one word (BoundaryGroup::name)
+    std::string family;     ///< "boundary", "chart", "patch", ...
+    int id = 0;             ///< number within the family, >= 0
+    std::vector<int> rows;  ///< rows of `quads`, sorted
+  };
+  std::vector<Group> groups;
+  bool empty() const { return groups.empty(); }
+  /// The families in the order they first appear in `groups`.
+  std::vector<std::string> families() const;
+  /// Per quad, the id of its group of `family`, -1 for a quad in none.
+  std::vector<int> family_ids(const std::string& family) const;
+};
+
+/// Volume mesh output formats. Exodus II and Abaqus are written for hex meshes only (hexmesh_io.h).
+enum class MeshFormat { VtkAscii, VtkBinary, Medit, Gmsh, Exodus, Abaqus };
 
 /// The format of a volume mesh file: `format` is "auto" (by extension: .vtk -> VTK ASCII, .mesh ->
-/// Medit, .msh -> Gmsh 4.1), "vtk", "vtk_binary", "mesh" or "msh".
+/// Medit, .msh -> Gmsh 4.1, and with `solver_formats` .e / .exo -> Exodus II, .inp -> Abaqus), "vtk",
+/// "vtk_binary", "mesh", "msh", and with `solver_formats` "exodus", "abaqus".
 /// \throw IOError naming the file for "auto" with another extension
 /// \throw ConfigError for an unknown format name (lists the valid ones)
-MeshFormat choose_mesh_format(const std::string& format, const std::filesystem::path& path);
+MeshFormat choose_mesh_format(const std::string& format, const std::filesystem::path& path,
+                              bool solver_formats = false);
 
 /// A block of cells: `rows` cells of `cols` vertex indices each, row-major, 0-based.
 struct CellBlock {
@@ -42,19 +62,31 @@ struct CellBlock {
 };
 
 /// Writes points and cells as a legacy VTK UNSTRUCTURED_GRID (version 2.0 header, classic CELLS),
-/// ASCII or BINARY (big-endian), with optional CELL_DATA arrays.
+/// ASCII or BINARY (big-endian), with optional CELL_DATA arrays. With face groups, their quads follow the
+/// cells as VTK_QUAD (9) cells, and each family is an int CELL_DATA array of that name: a quad's group id
+/// in the family, -1 on the volume cells and on quads in no group of it; cell_data arrays get -1 (ints)
+/// or 0 (reals) on the quads.
 /// \param V  #V by 3 positions
 /// \pre every array of cell_data has cells.rows values
 /// \throw IOError on a failed write, InvalidInput on a wrong cell_data size or name
 void write_vtk_cells(const std::filesystem::path& path, const RowMatrixX3d& V, CellBlock cells, int vtk_type,
-                     bool binary, const CellData& cell_data = {});
+                     bool binary, const CellData& cell_data = {}, const FaceGroups& faces = {});
 /// Writes Medit `.mesh` (MeshVersionFormatted 2, double precision) with one cell section
-/// (`Tetrahedra`, `Hexahedra`), indices 1-based, reference 0. \throw IOError
+/// (`Tetrahedra`, `Hexahedra`), indices 1-based, reference 0. With face groups, their quads follow as
+/// `Quadrilaterals`, each with one reference (a Medit face has one): its group id in the first family other
+/// than "boundary" (the charts of a polyhex mesh), or in the first family if there is no other; -1 for a
+/// quad in no group of it. \throw IOError
 void write_medit_cells(const std::filesystem::path& path, const RowMatrixX3d& V, CellBlock cells,
-                       const std::string& section);
-/// Writes Gmsh `.msh` 4.1 ASCII with one volume entity, node tags 1..#V, element tags 1..#cells.
+                       const std::string& section, const FaceGroups& faces = {});
+/// Writes Gmsh `.msh` 4.1 ASCII with one volume entity, node tags 1..#V, element tags 1..#cells. With face
+/// groups: the volume is the physical group `volume` (dimension 3, tag 1), each group a physical group of
+/// dimension 2 (tags 1.. in order) with its name in $PhysicalNames, and the quads (element type 3, tags
+/// #cells+1..) sit on one surface entity per set of groups that hold the same quads, which carries those
+/// groups' tags. (Gmsh keeps only elements of physical groups when it saves a mesh that has some, hence the
+/// volume group.)
 /// \throw IOError
-void write_gmsh_cells(const std::filesystem::path& path, const RowMatrixX3d& V, CellBlock cells, int gmsh_type);
+void write_gmsh_cells(const std::filesystem::path& path, const RowMatrixX3d& V, CellBlock cells, int gmsh_type,
+                      const FaceGroups& faces = {});
 
 /// Cells read from a file.
 struct CellsRead {
@@ -84,20 +116,22 @@ struct CellKind {
 inline constexpr CellKind kTetKind{10, "Tetrahedra", 4, 4};
 inline constexpr CellKind kHexKind{12, "Hexahedra", 5, 8};
 
-/// Writes a volume mesh in the format chosen by choose_mesh_format(format, path). Cell data is
-/// written by the VTK formats only (Medit and Gmsh files carry none).
+/// Writes a volume mesh in the format chosen by choose_mesh_format(format, path) (not Exodus or Abaqus). Cell data is
+/// written by the VTK formats only (Medit and Gmsh files carry none); face groups by every format.
 /// \pre cells.cols == kind.nodes
-/// 	hrow IOError, ConfigError as choose_mesh_format and the writers
+/// \throw IOError, ConfigError as choose_mesh_format and the writers
 void write_cell_mesh(const std::filesystem::path& path, const RowMatrixX3d& V, CellBlock cells, const CellKind& kind,
-                     const std::string& format, const CellData& cell_data = {});
+                     const std::string& format, const CellData& cell_data = {}, const FaceGroups& faces = {});
 /// Reads the cells of `kind` from .vtk, .mesh or .msh (by extension).
-/// 	hrow IOError for another extension or malformed content
+/// \throw IOError for another extension or malformed content
 CellsRead read_cell_mesh(const std::filesystem::path& path, const CellKind& kind);
 
 namespace io_detail {
 /// Pieces of the legacy VTK writer, shared with the surface writer.
 void append_vtk_header(std::string& out, const std::string& title, bool binary, const std::string& dataset);
 void append_vtk_points(std::string& out, const RowMatrixX3d& V, bool binary);
+/// \throw InvalidInput naming `file` when an array's name is not one word or it has not `cells` values
+void check_array_name(const std::string& name, size_t size, Eigen::Index cells, const std::string& file);
 /// \throw InvalidInput naming `file` when an array has the wrong size or a blank in its name
 void append_vtk_cell_data(std::string& out, const CellData& data, Eigen::Index cells, bool binary,
                           const std::string& file);

@@ -33,7 +33,18 @@ Vec3 point_at(const std::vector<Vec3>& line, double s) {
 
 }  // namespace
 
-SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double min_length) {
+namespace {
+
+/// An edge shared by exactly two triangles, with the angle test already done.
+struct ManifoldEdge {
+  int a, b;       ///< vertices, a < b
+  int f0, f1;     ///< the two triangles
+  bool sharp;     ///< their normals differ by more than the threshold angle
+};
+
+/// Every edge of `surface` shared by exactly two triangles, sorted by (a, b).
+/// \throw InvalidInput when a triangle index is out of range
+std::vector<ManifoldEdge> manifold_edges(const SurfaceMesh& surface, double angle_deg) {
   const auto& V = surface.V;
   const auto& F = surface.F;
   const Eigen::Index nv = V.rows();
@@ -57,19 +68,63 @@ SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double
     }
   std::sort(half.begin(), half.end());
   const double cos_max = std::cos(angle_deg * M_PI / 180.0);
-  std::vector<std::vector<int>> adj(static_cast<size_t>(nv));  // sharp-edge neighbours
+  std::vector<ManifoldEdge> out;
   for (size_t i = 0; i < half.size();) {
     size_t j = i;
     while (j < half.size() && half[j][0] == half[i][0] && half[j][1] == half[i][1]) ++j;
     if (j - i == 2) {
       const Vec3& n0 = normal[size_t(half[i][2])];
       const Vec3& n1 = normal[size_t(half[i + 1][2])];
-      if (n0.squaredNorm() > 0 && n1.squaredNorm() > 0 && n0.dot(n1) < cos_max) {
-        adj[size_t(half[i][0])].push_back(half[i][1]);
-        adj[size_t(half[i][1])].push_back(half[i][0]);
-      }
+      const bool sharp = n0.squaredNorm() > 0 && n1.squaredNorm() > 0 && n0.dot(n1) < cos_max;
+      out.push_back({half[i][0], half[i][1], half[i][2], half[i + 1][2], sharp});
     }
     i = j;
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::array<int, 2>> sharp_edges(const SurfaceMesh& surface, double angle_deg) {
+  std::vector<std::array<int, 2>> out;
+  for (const ManifoldEdge& e : manifold_edges(surface, angle_deg))
+    if (e.sharp) out.push_back({e.a, e.b});
+  return out;
+}
+
+Eigen::VectorXi surface_patches(const SurfaceMesh& surface, double angle_deg, int* patches) {
+  const std::vector<ManifoldEdge> edges = manifold_edges(surface, angle_deg);
+  const int nf = int(surface.F.rows());
+  std::vector<int> parent(static_cast<size_t>(nf));
+  for (int f = 0; f < nf; ++f) parent[size_t(f)] = f;
+  auto find = [&](int f) {
+    while (parent[size_t(f)] != f) f = parent[size_t(f)] = parent[size_t(parent[size_t(f)])];
+    return f;
+  };
+  for (const ManifoldEdge& e : edges)
+    if (!e.sharp) {
+      const int r0 = find(e.f0), r1 = find(e.f1);
+      if (r0 != r1) parent[size_t(std::max(r0, r1))] = std::min(r0, r1);  // the root is the lowest triangle
+    }
+  Eigen::VectorXi patch(nf);
+  std::vector<int> id(static_cast<size_t>(nf), -1);
+  int n = 0;
+  for (int f = 0; f < nf; ++f) {
+    const int r = find(f);
+    if (id[size_t(r)] < 0) id[size_t(r)] = n++;
+    patch[f] = id[size_t(r)];
+  }
+  if (patches) *patches = n;
+  return patch;
+}
+
+SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double min_length) {
+  const auto& V = surface.V;
+  const Eigen::Index nv = V.rows();
+  std::vector<std::vector<int>> adj(static_cast<size_t>(nv));  // sharp-edge neighbours
+  for (const auto& [a, b] : sharp_edges(surface, angle_deg)) {
+    adj[size_t(a)].push_back(b);
+    adj[size_t(b)].push_back(a);
   }
   auto is_node = [&](int v) { return adj[size_t(v)].size() != 2; };
   SurfaceCreases out;

@@ -11,6 +11,7 @@
 /// have an edge on it instead of a face across it.
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include "nodes/artefacts/meshes.h"
@@ -25,6 +26,19 @@ struct SurfaceCreases {
   std::vector<int> start_corner, end_corner;        ///< per line: index into corners of its ends, -1 if none
   std::vector<Eigen::Vector3d> corners;             ///< crease vertices with >= 3 crease edges
 };
+
+/// The sharp edges of a surface: edges shared by exactly two triangles whose normals differ by more than
+/// `angle_deg` (triangles of zero area make no sharp edge).
+/// \return (low, high) vertex pairs, sorted
+/// \throw InvalidInput when a triangle index is out of range
+std::vector<std::array<int, 2>> sharp_edges(const SurfaceMesh& surface, double angle_deg);
+
+/// The patches of a surface bounded by its sharp edges (sharp_edges): triangles connected across edges
+/// that are shared by two triangles and not sharp. A crease that does not close a region splits nothing.
+/// \param patches  out (optional): the number of patches
+/// \return #F patch id of each triangle, numbered 0.. in the order of each patch's lowest triangle
+/// \throw InvalidInput when a triangle index is out of range
+Eigen::VectorXi surface_patches(const SurfaceMesh& surface, double angle_deg, int* patches = nullptr);
 
 /// Finds the creases of a closed surface.
 /// \param angle_deg  a surface edge is sharp when its triangles' normals differ by more than this, (0, 180)

@@ -66,8 +66,10 @@ struct FaceRef {
   bool operator<(const FaceRef& o) const { return key < o.key || (key == o.key && id < o.id); }
 };
 
-// Faces used by exactly one hex, in (hex, face) order; counts faces used more than twice; the hex of each.
-RowMatrixX4iQ boundary_faces(const HexMesh& m, long* faces_over_two, std::vector<int>* hex_of_face = nullptr) {
+// Faces used by exactly one hex, in (hex, face) order; counts faces used more than twice; the hex and local
+// face of each.
+RowMatrixX4iQ boundary_faces(const HexMesh& m, long* faces_over_two, std::vector<int>* hex_of_face = nullptr,
+                             std::vector<int>* local_face = nullptr) {
   const Eigen::Index nh = m.H.rows();
   std::vector<FaceRef> faces(size_t(nh) * 6);
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, nh), [&](const tbb::blocked_range<Eigen::Index>& r) {
@@ -97,6 +99,10 @@ RowMatrixX4iQ boundary_faces(const HexMesh& m, long* faces_over_two, std::vector
   if (hex_of_face) {
     hex_of_face->resize(single.size());
     for (size_t i = 0; i < single.size(); ++i) (*hex_of_face)[i] = single[i] / 6;
+  }
+  if (local_face) {
+    local_face->resize(single.size());
+    for (size_t i = 0; i < single.size(); ++i) (*local_face)[i] = single[i] % 6;
   }
   return q;
 }
@@ -268,8 +274,9 @@ double hex_mesh_volume(const HexMesh& mesh) {
   return vol.sum();  // serial sum: the same figure for any thread count
 }
 
-Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> hex_boundary_quads(const HexMesh& mesh, std::vector<int>* hex_of_quad) {
-  return boundary_faces(mesh, nullptr, hex_of_quad);
+Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> hex_boundary_quads(const HexMesh& mesh, std::vector<int>* hex_of_quad,
+                                                                       std::vector<int>* face_of_quad) {
+  return boundary_faces(mesh, nullptr, hex_of_quad, face_of_quad);
 }
 
 void check_hex_mesh(const HexMesh& mesh) {

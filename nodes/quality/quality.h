@@ -83,9 +83,11 @@ double hex_mesh_volume(const HexMesh& mesh);
 /// Boundary quads: hex faces (as vertex sets) used by exactly one hex, in the hex's own vertex
 /// order, which faces outward for a positive hex. Rows in order of (hex, face).
 /// \param hex_of_quad  out (optional): the hex of each row
+/// \param face_of_quad  out (optional): its local face 0..5 in that hex (hex_topology::kFaces)
 /// \return #Q by 4   \pre indices of mesh.H in range
 Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> hex_boundary_quads(const HexMesh& mesh,
-                                                                       std::vector<int>* hex_of_quad = nullptr);
+                                                                       std::vector<int>* hex_of_quad = nullptr,
+                                                                       std::vector<int>* face_of_quad = nullptr);
 
 /// Checks that a hex mesh can be measured.
 /// \throw InvalidInput when it has no hexes, an index is out of range or a coordinate is not finite

@@ -63,6 +63,20 @@ TEST_CASE("config errors on the real nodes name the node, the param and the vali
                       {"id":"w","type":"write_tetmesh","params":{"format":"stl"},"inputs":["tets"]}]})"),
         Contains("node `w`") && Contains("param `format` = \"stl\" is not one of: auto, vtk, vtk_binary, mesh, msh"));
   }
+  SECTION("boundary_groups: an unknown param, an angle out of range, a surface where the map is expected") {
+    const std::string head = R"({"nodes":[{"id":"surface","type":"read_surface","params":{"path":"shape:box"}},
+                      {"id":"tets","type":"tetrahedralize/tetgen","inputs":["surface"]},
+                      {"id":"hex","type":"hex_from_tets","inputs":["tets"]},)";
+    REQUIRE_THROWS_WITH(build_real(head + R"({"id":"g","type":"boundary_groups","params":{"chart":false},
+                                               "inputs":{"hexes":"hex"}}]})"),
+                        Contains("node `g`") && Contains("unknown param `chart`") && Contains("charts"));
+    REQUIRE_THROWS_WITH(build_real(head + R"({"id":"g","type":"boundary_groups","params":{"feature_angle":180},
+                                               "inputs":{"hexes":"hex"}}]})"),
+                        Contains("node `g`") && Contains("param `feature_angle` = 180 is out of range"));
+    REQUIRE_THROWS_WITH(build_real(head + R"({"id":"g","type":"boundary_groups",
+                                               "inputs":{"hexes":"hex","map":"surface"}}]})"),
+                        Contains("node `g`") && Contains("expects PolyCubeMap"));
+  }
   SECTION("a surface where a tet mesh is expected") {
     REQUIRE_THROWS_WITH(
         build_real(R"({"nodes":[{"id":"surface","type":"read_surface","params":{"path":"shape:box"}},

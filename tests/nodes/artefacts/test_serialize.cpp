@@ -221,3 +221,59 @@ TEST_CASE("serialize: truncated, oversized and inconsistent payloads are rejecte
   m.U.setZero();
   CHECK_THROWS_WITH(decode<PolyCubeMap>(encode(m)), Contains("U has 3 rows for 5 vertices"));
 }
+
+namespace {
+// One unit hex with two boundary groups of different families that share a face.
+HexMesh hex_with_groups() {
+  HexMesh h;
+  h.V.resize(8, 3);
+  h.V << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1;
+  h.H.resize(1, 8);
+  h.H << 0, 1, 2, 3, 4, 5, 6, 7;
+  h.source = "one hex";
+  h.groups = {{"boundary", "boundary", 0, {{0, 0}, {0, 1}, {0, 2}, {0, 3}, {0, 4}, {0, 5}}},
+              {"chart_7", "chart", 7, {{0, 1}, {0, 4}}}};
+  return h;
+}
+}  // namespace
+
+TEST_CASE("serialize: a hex mesh's boundary groups round-trip exactly; bad groups are refused", "[cache]") {
+  const HexMesh h = hex_with_groups();
+  const std::string bytes = encode(h);
+  auto h2 = decode<HexMesh>(bytes);
+  CHECK(h2->V == h.V);
+  CHECK(h2->H == h.H);
+  REQUIRE(h2->groups.size() == 2);
+  for (size_t g = 0; g < 2; ++g) {
+    CHECK(h2->groups[g].name == h.groups[g].name);
+    CHECK(h2->groups[g].family == h.groups[g].family);
+    CHECK(h2->groups[g].id == h.groups[g].id);
+    CHECK(h2->groups[g].faces == h.groups[g].faces);
+  }
+  // layout: source, V, H, then the group count and per group name, family, id, faces (8 bytes each)
+  const size_t mesh_bytes = 8 + 7 + 8 + 8 * 3 * 8 + 8 + 8 * 4;
+  CHECK(bytes.size() == mesh_bytes + 8 + (8 + 8 + 8 + 8 + 4 + 8 + 6 * 8) + (8 + 7 + 8 + 5 + 4 + 8 + 2 * 8));
+  // a mesh without groups still decodes to none
+  HexMesh plain = h;
+  plain.groups.clear();
+  CHECK(decode<HexMesh>(encode(plain))->groups.empty());
+
+  HexMesh bad = h;
+  bad.groups[1].faces.push_back({0, 6});
+  CHECK_THROWS_WITH(decode<HexMesh>(encode(bad)), Contains("HexMesh payload") && Contains("`chart_7`") &&
+                                                      Contains("face (0, 6) out of range"));
+  bad = h;
+  bad.groups[1].name = "boundary";
+  CHECK_THROWS_WITH(decode<HexMesh>(encode(bad)), Contains("the name is used twice"));
+  bad = h;
+  bad.groups[1].faces = {{0, 4}, {0, 1}};
+  CHECK_THROWS_WITH(decode<HexMesh>(encode(bad)), Contains("faces not sorted or repeated"));
+  bad = h;
+  bad.groups.push_back({"chart_8", "chart", 8, {{0, 4}}});
+  CHECK_THROWS_WITH(decode<HexMesh>(encode(bad)), Contains("face (0, 4) is in another `chart` group too"));
+  bad = h;
+  bad.groups[1].name = "chart 7";
+  CHECK_THROWS_WITH(decode<HexMesh>(encode(bad)), Contains("the name must be a letter"));
+  // truncated inside the groups
+  for (size_t cut : {mesh_bytes + 4, bytes.size() - 3}) CHECK_THROWS_AS(decode<HexMesh>(bytes.substr(0, cut)), IOError);
+}

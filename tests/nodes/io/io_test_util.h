@@ -88,6 +88,29 @@ inline HexMesh hex_grid(int n) {
   return m;
 }
 
+/// hex_grid(n) with boundary groups: `boundary` (every boundary face) and `side_<f>` (family "side", id f)
+/// for local face f = 0..5 of hex_topology::kFaces, which for this grid's vertex order is one side of it:
+/// 0 z = min, 1 z = max, 2 y = min, 3 x = max, 4 y = max, 5 x = min. All six local faces are used.
+inline HexMesh hex_grid_with_side_groups(int n) {
+  HexMesh m = hex_grid(n);
+  m.source = "grid";
+  BoundaryGroup all{"boundary", "boundary", 0, {}};
+  std::vector<BoundaryGroup> side(6);
+  for (int f = 0; f < 6; ++f) side[size_t(f)] = {"side_" + std::to_string(f), "side", f, {}};
+  for (int h = 0; h < n * n * n; ++h) {
+    const int i = h % n, j = (h / n) % n, k = h / (n * n);
+    const bool on[6] = {k == 0, k == n - 1, j == 0, i == n - 1, j == n - 1, i == 0};
+    for (int f = 0; f < 6; ++f)
+      if (on[f]) {
+        all.faces.push_back({h, f});
+        side[size_t(f)].faces.push_back({h, f});
+      }
+  }
+  m.groups.push_back(all);
+  for (auto& g : side) m.groups.push_back(g);
+  return m;
+}
+
 /// The hex grid split into 6 positive tets per hex (Kuhn subdivision along the 0-6 diagonal).
 inline TetMesh tet_grid(int n) {
   HexMesh h = hex_grid(n);

@@ -152,3 +152,23 @@ TEST_CASE("optimizer: a poor result is tried again with the boundary on the crea
   CHECK(full.inverted_after == 0);
   CHECK(full.sj_min_after > 0.9);
 }
+
+TEST_CASE("surface_patches: a box has six patches bounded by its sharp edges, one above 90 degrees", "[features]") {
+  const SurfaceMesh box = test::voxel_surface(test::voxel_box(2, 3, 1));
+  int n = 0;
+  const Eigen::VectorXi patch = surface_patches(box, 40, &n);
+  REQUIRE(n == 6);
+  REQUIRE(patch.size() == box.F.rows());
+  // every patch is one side of the box: all its triangles have the same normal
+  std::vector<Eigen::Vector3d> normal(6, Eigen::Vector3d::Zero());
+  for (Eigen::Index f = 0; f < box.F.rows(); ++f) {
+    const Eigen::Vector3d a = box.V.row(box.F(f, 0)), b = box.V.row(box.F(f, 1)), c = box.V.row(box.F(f, 2));
+    const Eigen::Vector3d nf = (b - a).cross(c - a).normalized();
+    if (normal[size_t(patch[f])].isZero()) normal[size_t(patch[f])] = nf;
+    CHECK((normal[size_t(patch[f])] - nf).norm() < 1e-12);
+  }
+  CHECK(sharp_edges(box, 40).size() == 4 * (2 + 3 + 1));  // the 12 box edges, in unit segments
+  CHECK(sharp_edges(box, 95).empty());
+  surface_patches(box, 95, &n);
+  CHECK(n == 1);
+}
