@@ -192,7 +192,8 @@ RunResult run_with_retry(const Pipeline& p, const std::optional<RetryPlan>& retr
     if (r.interrupted) {
       record(r, plan.variants[k], nullptr);
       r.seconds = total;
-      r.retry = {{"node", plan.node}, {"chosen", nullptr}, {"attempts", attempts}};
+      r.retry = {{"node", plan.node}, {"max_inverted", plan.max_inverted}, {"min_sj", plan.min_sj}, {"chosen", nullptr},
+                 {"attempts", attempts}};
       write_report(r, req.out_dir);
       return r;
     }
@@ -210,7 +211,8 @@ RunResult run_with_retry(const Pipeline& p, const std::optional<RetryPlan>& retr
   }
   if (chosen > 0) move_files(req.out_dir / (".retry-" + std::to_string(chosen)), req.out_dir);
   best.seconds = total;
-  best.retry = {{"node", plan.node}, {"chosen", chosen}, {"attempts", attempts}};
+  best.retry = {{"node", plan.node}, {"max_inverted", plan.max_inverted}, {"min_sj", plan.min_sj}, {"chosen", chosen},
+                {"attempts", attempts}};
   write_report(best, req.out_dir);
   return best;
 }
