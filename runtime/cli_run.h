@@ -63,7 +63,7 @@ std::optional<RetryPlan> retry_plan(const json& config, const Pipeline& pipeline
 /// applies to the variants too; a variant's own values win). \throw ConfigError
 Pipeline load_pipeline(const RunRequest& req, std::optional<RetryPlan>* retry = nullptr);
 
-/// Runs the pipeline, prints progress to stderr when stderr is a terminal (or verbosity > 0),
+/// Runs the pipeline, shows its progress on stderr (runtime/progress.h: a bar on a terminal, lines with -v),
 /// writes report.json into the output folder. Uses the artefact cache unless req.no_cache.
 RunResult run_pipeline(const Pipeline& p, const RunRequest& req);
 
