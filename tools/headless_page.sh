@@ -4,7 +4,7 @@
 # (tests/tools/test_report.cpp) and docs/report.png use this one command.
 #   tools/headless_page.sh dom PAGE.html              the DOM on stdout, Chromium's log on stderr
 #   tools/headless_page.sh screenshot PAGE.html OUT.png
-# Environment: CHROMIUM (default: chromium on PATH), WINDOW (default 1280,900).
+# Environment: CHROMIUM (default: chromium on PATH), WINDOW (default 1120,860).
 # Exit 127 when Chromium is missing; otherwise Chromium's exit status.
 set -euo pipefail
 mode=${1:?usage: headless_page.sh dom|screenshot PAGE.html [OUT.png]}
@@ -22,7 +22,7 @@ trap 'rm -rf "$profile"' EXIT
 flags=(--headless --no-sandbox --disable-gpu --use-angle=swiftshader --enable-unsafe-swiftshader
        --user-data-dir="$profile" --no-first-run --no-default-browser-check --disable-extensions
        --host-resolver-rules="MAP * ~NOTFOUND" --no-proxy-server
-       --window-size="${WINDOW:-1280,900}" --hide-scrollbars --force-device-scale-factor=1
+       --window-size="${WINDOW:-1120,860}" --hide-scrollbars --force-device-scale-factor=1
        --enable-logging=stderr --v=0 --virtual-time-budget=15000)
 case "$mode" in
   dom) exec "$chromium" "${flags[@]}" --dump-dom "$url" ;;
