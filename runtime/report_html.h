@@ -22,7 +22,8 @@
 /// The page reports its own state for tests: `<pre id="status" data-state="loading|ready|error">`, every
 /// error (window.onerror, console.error, a missing WebGL) in `<ul id="errors">`, each figure as
 /// `<tr data-key="KEY"><td class="value" data-value="VALUE as JSON">`, and the canvas rectangle as the
-/// view's `data-rect="x y width height"` (CSS pixels).
+/// view's `data-rect="x y width height"` (CSS pixels) and `data-clip="AXIS SHARE"`. `report.html#clip=z,0.4` opens
+/// the view clipped (the share of the bounding box kept below the plane along the axis).
 #pragma once
 
 #include <nlohmann/json.hpp>

@@ -4,6 +4,7 @@
 # (tests/tools/test_report.cpp) and docs/report.png use this one command.
 #   tools/headless_page.sh dom PAGE.html              the DOM on stdout, Chromium's log on stderr
 #   tools/headless_page.sh screenshot PAGE.html OUT.png
+#   PAGE.html#fragment                                 the page opened at that fragment (report.html#clip=z,0.5)
 # Environment: CHROMIUM (default: chromium on PATH), WINDOW (default 1120,860).
 # Exit 127 when Chromium is missing; otherwise Chromium's exit status.
 set -euo pipefail
@@ -14,7 +15,9 @@ if [ -z "$chromium" ] || ! [ -x "$chromium" ]; then
   echo "headless_page.sh: chromium not found (Debian package chromium; tools/setup.sh installs it)" >&2
   exit 127
 fi
-url="file://$(realpath "$page")"
+# PAGE may end in a fragment (report.html#clip=z,0.5): the file is the part before '#'.
+file=${page%%#*}
+url="file://$(realpath "$file")${page#"$file"}"
 # A throw-away profile, no network (every host resolves to nothing), a fixed window; the virtual time
 # budget lets the page's scripts finish before the DOM or the pixels are taken.
 profile=$(mktemp -d)

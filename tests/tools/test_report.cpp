@@ -152,6 +152,31 @@ TEST_CASE("report: the page in headless Chromium shows the mesh and report.json'
   INFO("drawn " << drawn / area << ", green " << green / area);
   CHECK(drawn > 0.15 * area);
   CHECK(green > 0.10 * area);
+
+  // The clipping plane: opened at #clip=z,0.5 the view keeps the lower half, so the upper part of the mesh is
+  // gone (background where the top was) and the picture changes.
+  CliRun clipped_dom = headless("dom", page.string() + "#clip=z,0.5", out);
+  CHECK_THAT(clipped_dom.out, Contains("data-clip=\"z 0.5\"") && Contains("data-state=\"ready\""));
+  CliRun clipped = headless("screenshot", page.string() + "#clip=z,0.5", out, "'" + (out / "clipped.png").string() + "'");
+  REQUIRE(clipped.code == 0);
+  const polyhex::test::Image cut = polyhex::test::decode_png(polyhex::test::read_text(out / "clipped.png"));
+  REQUIRE(cut.width == img.width);
+  long changed = 0, drawn_cut = 0;
+  for (int y = y0; y < y0 + h; ++y)
+    for (int x = x0; x < x0 + w; ++x) {
+      const std::uint8_t *a = img.at(x, y), *b = cut.at(x, y);
+      int diff = 0, bg = 0;
+      for (int k = 0; k < 3; ++k) {
+        diff = std::max(diff, std::abs(int(a[k]) - int(b[k])));
+        bg = std::max(bg, std::abs(int(b[k]) - int(background[k])));
+      }
+      changed += diff > 24;
+      drawn_cut += bg > 24;
+    }
+  INFO("changed " << changed / area << ", drawn when clipped " << drawn_cut / area);
+  CHECK(changed > 0.05 * area);
+  CHECK(drawn_cut < drawn);
+  CHECK(drawn_cut > 0.05 * area);  // the lower half is still there
 }
 
 TEST_CASE("report: a folder without report.json or without the mesh is refused, naming the file", "[report]") {
