@@ -2,7 +2,7 @@
 //
 //   polyhex run CONFIG [--input FILE] [--out DIR] [--set id.param=value]... [--threads N] [--save-all]
 //               [--cache DIR | --no-cache] [--html] [-v]
-//   polyhex report RUN_DIR                        (RUN_DIR/report.html, tools/report_command.cpp)
+//   polyhex report RUN_DIR [--max-quads N] [--min-sj X]   (RUN_DIR/report.html, tools/report_command.cpp)
 //   polyhex bench CONFIG [--input FILE] [--repeat N] [--json FILE] [--set ...] [--threads N]
 //   polyhex graph CONFIG [--input FILE]          (Graphviz DOT on stdout)
 //   polyhex nodes [--json]                        (registered node types and their params)
@@ -51,7 +51,8 @@ int cmd_run(const RunRequest& req, bool html) {
   }
   if (!r.error.empty()) {
     std::fprintf(stderr, "polyhex: error: %s\n", r.error.c_str());
-    std::fprintf(stderr, "polyhex: partial report in %s\n", (req.out_dir / "report.json").c_str());
+    std::fprintf(stderr, "polyhex: partial report in %s%s\n", (req.out_dir / "report.json").c_str(),
+                 html ? " (no report.html: the run wrote no mesh to show)" : "");
     return 1;
   }
   std::fprintf(stderr, "polyhex: done in %.2f s; report: %s\n", r.seconds, (req.out_dir / "report.json").c_str());

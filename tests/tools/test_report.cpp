@@ -198,6 +198,14 @@ TEST_CASE("report: a folder without report.json or without the mesh is refused, 
   for (auto& e : fs::directory_iterator(out)) CHECK(e.path().string().find(".tmp.") == std::string::npos);
 
   fs::rename(out / "moved.vtk", out / "hex.vtk");
+  // A failed run with --html: no page, and the message says why.
+  CliRun failed = run_polyhex("run " + source("configs/baseline.json") + " --input " + (out / "missing.stl").string() +
+                              " --out " + (out / "failed").string() + " --html");
+  INFO(failed.out);
+  CHECK(failed.code == 1);
+  CHECK_THAT(failed.out, Contains("no report.html"));
+  CHECK_FALSE(fs::exists(out / "failed" / "report.html"));
+
   CliRun ok = run_polyhex("report " + out.string());
   INFO(ok.out);
   CHECK(ok.code == 0);
