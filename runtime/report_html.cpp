@@ -65,7 +65,8 @@ json histogram(const Eigen::VectorXd& values, double lo, double hi, int bins) {
 std::string quality_node(const json& report) {
   auto is_quality = [&](const std::string& id) {
     const json& n = report["nodes"][id];
-    const std::string type = n.value("type", "");
+    if (!n.is_object() || !n.contains("type") || !n["type"].is_string()) return false;
+    const std::string type = n["type"];
     return type.substr(0, type.find('/')) == "quality" && n.contains("metrics") && n["metrics"].is_object();
   };
   if (report.contains("retry") && report["retry"].is_object() && report["retry"].contains("node") &&
@@ -74,7 +75,7 @@ std::string quality_node(const json& report) {
     if (report["nodes"].contains(id) && is_quality(id)) return id;
   }
   for (auto it = report["nodes"].begin(); it != report["nodes"].end(); ++it)
-    if (it.value().is_object() && is_quality(it.key())) return it.key();
+    if (is_quality(it.key())) return it.key();
   throw InvalidInput("report.json: no quality node with metrics (the page shows the quality node's figures)");
 }
 
@@ -357,6 +358,8 @@ fs::path write_report_html(const fs::path& run_dir, const ReportHtmlParams& p, c
     data = report_page_data(report, mesh, p);
   } catch (const InvalidInput& e) {
     throw InvalidInput(report_path.string() + " and " + mesh.source + ": " + e.what());
+  } catch (const json::exception& e) {  // a value of another type than polyhex writes
+    throw IOError(report_path.string() + ": not a report.json of polyhex run: " + e.what());
   }
   data["run_dir"] = fs::absolute(run_dir).lexically_normal().string();
   const fs::path out = run_dir / "report.html";

@@ -73,8 +73,9 @@ std::filesystem::path report_mesh_path(const nlohmann::json& report, const std::
 /// RUN_DIR/report.html atomically (runtime/atomic_file.h): on any error no report.html is written and an
 /// existing one is kept.
 /// \return the path written
-/// \throw IOError naming the file that is missing or malformed (report.json, the mesh, three.js) or
-///        cannot be written; InvalidInput from report_page_data
+/// \throw IOError naming the file that is missing or malformed (report.json, also when a value has another
+///        type than `polyhex run` writes; the mesh; three.js) or cannot be written; InvalidInput from
+///        report_page_data
 std::filesystem::path write_report_html(const std::filesystem::path& run_dir, const ReportHtmlParams& p = {},
                                         const std::filesystem::path& three_dir = "/usr/share/javascript/three");
 

@@ -8,6 +8,7 @@
 #include <numeric>
 #include <set>
 
+#include "nodes/io/hexmesh_io.h"
 #include "nodes/quality/quality.h"
 #include "nodes/quality/quality_json.h"
 #include "runtime/errors.h"
@@ -208,6 +209,13 @@ TEST_CASE("report html: three.js, report.json and the mesh are found or named", 
   std::ofstream(dir / "report.json") << report_of(m).dump();
   std::filesystem::remove(dir / "hex.vtk");
   CHECK_THROWS_WITH(write_report_html(dir.path), Contains("hex.vtk"));
+  CHECK_FALSE(std::filesystem::exists(dir / "report.html"));
+  json odd = report_of(m);
+  odd["seconds"] = "soon";  // valid JSON, not polyhex's
+  std::ofstream(dir / "report.json") << odd.dump();
+  write_hexmesh(m, dir / "hex.vtk");
+  CHECK_THROWS_AS(write_report_html(dir.path), IOError);
+  CHECK_THROWS_WITH(write_report_html(dir.path), Contains("report.json") && Contains("not a report.json of polyhex run"));
   CHECK_FALSE(std::filesystem::exists(dir / "report.html"));
   std::ofstream(dir / "report.json") << "{ not json";
   CHECK_THROWS_WITH(write_report_html(dir.path), Contains("report.json") && Contains("not valid JSON"));
