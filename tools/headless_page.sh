@@ -22,7 +22,7 @@ url="file://$(realpath "$file")${page#"$file"}"
 # budget lets the page's scripts finish before the DOM or the pixels are taken.
 profile=$(mktemp -d)
 trap 'rm -rf "$profile"' EXIT
-flags=(--headless --no-sandbox --disable-gpu --use-angle=swiftshader --enable-unsafe-swiftshader
+flags=(--headless --no-sandbox --disable-dev-shm-usage --disable-gpu --use-angle=swiftshader --enable-unsafe-swiftshader
        --user-data-dir="$profile" --no-first-run --no-default-browser-check --disable-extensions
        --host-resolver-rules="MAP * ~NOTFOUND" --no-proxy-server
        --window-size="${WINDOW:-1120,860}" --hide-scrollbars --force-device-scale-factor=1
