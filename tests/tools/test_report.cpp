@@ -122,9 +122,18 @@ TEST_CASE("report: the page in headless Chromium shows the mesh and report.json'
   REQUIRE(std::regex_search(dom.out, irr, std::regex(R"re(id="irregular" data-count="(\d+)" data-used-vertices="(\d+)")re")));
   CHECK(100.0 * std::stod(irr[1].str()) / std::stod(irr[2].str()) == Approx(q["irregular_pct"].get<double>()).epsilon(1e-12));
 
-  // Retry attempts: one row each.
+  // Retry attempts: one row each, with the attempt's figures; the rule's thresholds.
   REQUIRE(rep.contains("retry"));
-  CHECK(pairs(dom.out, std::regex(R"re(<tr data-attempt="(\d+)" class="([^"]*)")re")).size() == rep["retry"]["attempts"].size());
+  const json& attempts = rep["retry"]["attempts"];
+  const std::regex attempt_re(R"re(<tr data-attempt="(\d+)" class="[^"]*" data-inverted="([^"]*)" data-sj-min="([^"]*)")re");
+  size_t rows = 0;
+  for (auto it = std::sregex_iterator(dom.out.begin(), dom.out.end(), attempt_re); it != std::sregex_iterator(); ++it, ++rows) {
+    const json& a = attempts.at(std::stoul((*it)[1].str()));
+    CHECK(json::parse((*it)[2].str()) == a["inverted"]);
+    CHECK(json::parse((*it)[3].str()) == a["sj_min"]);
+  }
+  CHECK(rows == attempts.size());
+  CHECK_THAT(dom.out, Contains("minimum scaled Jacobian ≥ " + rep["retry"]["min_sj"].dump()));
 
   // The screenshot: the view's rectangle (as the page reports it) is mostly mesh, coloured by SJ (green is
   // near 1), not a blank canvas.
