@@ -38,6 +38,7 @@
 #include "nodes/artefacts/meshes.h"
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
+#include "runtime/progress.h"
 
 namespace polyhex {
 
@@ -104,13 +105,17 @@ struct NodeContext {
   bool save_all = false;                ///< --save-all: nodes may also write intermediate meshes
   json metrics = json::object();        ///< node-specific figures, copied into report.json
   std::vector<std::string> warnings;    ///< repairs and fallbacks, copied into report.json
-  std::function<void(double, const std::string&)> on_progress;  ///< may be empty
+  ProgressFn on_progress;               ///< may be empty
 
   void warn(const std::string& w) { warnings.push_back(w); }
   /// Reports progress and is a cancellation point: \throw Interrupted after SIGINT/SIGTERM.
   void progress(double fraction, const std::string& what = {}) const {
     throw_if_interrupted();
     if (on_progress) on_progress(fraction, what);
+  }
+  /// progress() as the callback of a compute function (valid while this context lives).
+  ProgressFn progress_fn() const {
+    return [this](double fraction, const std::string& what) { progress(fraction, what); };
   }
 };
 

@@ -8,6 +8,7 @@
 
 #include "graph/cache.h"
 #include "runtime/errors.h"
+#include "runtime/progress.h"
 
 namespace polyhex {
 namespace {
@@ -121,21 +122,11 @@ RunResult run_pipeline(const Pipeline& p, const RunRequest& req) {
   opt.save_all = req.save_all;
   opt.threads = req.threads;
   if (!req.no_cache) opt.cache_dir = req.cache_dir.empty() ? default_cache_dir(req.out_dir) : req.cache_dir;
-  const bool show = req.verbosity > 0 || ::isatty(STDERR_FILENO);
-  if (show) {
-    opt.on_event = [&](const std::string& e, const std::string& id, const std::string& type, double v,
-                       const std::string& what) {
-      if (e == "start")
-        std::fprintf(stderr, "polyhex: %-16s %-34s started\n", id.c_str(), type.c_str());
-      else if (e == "done")
-        std::fprintf(stderr, "polyhex: %-16s %-34s done in %.2f s\n", id.c_str(), type.c_str(), v);
-      else if (e == "cached")
-        std::fprintf(stderr, "polyhex: %-16s %-34s loaded from cache in %.2f s\n", id.c_str(), type.c_str(), v);
-      else if (e == "progress" && req.verbosity > 0)
-        std::fprintf(stderr, "polyhex: %-16s %3.0f%% %s\n", id.c_str(), 100 * v, what.c_str());
-    };
-  }
+  ProgressPrinter progress(stderr, progress_mode(req.verbosity, ::isatty(STDERR_FILENO)), terminal_columns(STDERR_FILENO));
+  opt.on_event = [&](const std::string& e, const std::string& id, const std::string& type, double v,
+                     const std::string& what) { progress.event(e, id, type, v, what); };
   RunResult r = p.run(opt);
+  progress.clear();
   write_report(r, req.out_dir);
   return r;
 }
@@ -192,7 +183,8 @@ RunResult run_with_retry(const Pipeline& p, const std::optional<RetryPlan>& retr
     if (r.interrupted) {
       record(r, plan.variants[k], nullptr);
       r.seconds = total;
-      r.retry = {{"node", plan.node}, {"chosen", nullptr}, {"attempts", attempts}};
+      r.retry = {{"node", plan.node}, {"max_inverted", plan.max_inverted}, {"min_sj", plan.min_sj}, {"chosen", nullptr},
+                 {"attempts", attempts}};
       write_report(r, req.out_dir);
       return r;
     }
@@ -210,7 +202,8 @@ RunResult run_with_retry(const Pipeline& p, const std::optional<RetryPlan>& retr
   }
   if (chosen > 0) move_files(req.out_dir / (".retry-" + std::to_string(chosen)), req.out_dir);
   best.seconds = total;
-  best.retry = {{"node", plan.node}, {"chosen", chosen}, {"attempts", attempts}};
+  best.retry = {{"node", plan.node}, {"max_inverted", plan.max_inverted}, {"min_sj", plan.min_sj}, {"chosen", chosen},
+                {"attempts", attempts}};
   write_report(best, req.out_dir);
   return best;
 }

@@ -14,7 +14,7 @@
 /// nodes downstream of a changed param run again; with --no-cache a temporary cache OUT/.retry-cache
 /// serves the attempts and is removed), until one is accepted. The best attempt is kept: fewest inverted
 /// hexes, then the highest minimum scaled Jacobian (the first attempt wins a tie); its files are moved into
-/// OUT and report.json is its report with `retry`: {node, chosen (0 = the config as given), attempts:
+/// OUT and report.json is its report with `retry`: {node, max_inverted, min_sj, chosen (0 = the config as given), attempts:
 /// [{set, status, inverted, sj_min, seconds, accepted}]}; `seconds` is the time of all attempts.
 /// Why: the hex stage's outcome (the optimizer's minimum, whether a fold can be untangled) is sensitive to
 /// small changes of the map, so two equally sound variants of a stage each fail on some models where the
@@ -63,7 +63,7 @@ std::optional<RetryPlan> retry_plan(const json& config, const Pipeline& pipeline
 /// applies to the variants too; a variant's own values win). \throw ConfigError
 Pipeline load_pipeline(const RunRequest& req, std::optional<RetryPlan>* retry = nullptr);
 
-/// Runs the pipeline, prints progress to stderr when stderr is a terminal (or verbosity > 0),
+/// Runs the pipeline, shows its progress on stderr (runtime/progress.h: a bar on a terminal, lines with -v),
 /// writes report.json into the output folder. Uses the artefact cache unless req.no_cache.
 RunResult run_pipeline(const Pipeline& p, const RunRequest& req);
 

@@ -1,7 +1,8 @@
 // polyhex: command-line interface of the all-hex PolyCube mesher.
 //
 //   polyhex run CONFIG [--input FILE] [--out DIR] [--set id.param=value]... [--threads N] [--save-all]
-//               [--cache DIR | --no-cache] [-v]
+//               [--cache DIR | --no-cache] [--html] [-v]
+//   polyhex report RUN_DIR [--max-quads N] [--min-sj X]   (RUN_DIR/report.html, tools/report_command.cpp)
 //   polyhex bench CONFIG [--input FILE] [--repeat N] [--json FILE] [--set ...] [--threads N]
 //   polyhex graph CONFIG [--input FILE]          (Graphviz DOT on stdout)
 //   polyhex nodes [--json]                        (registered node types and their params)
@@ -25,6 +26,7 @@
 #include "runtime/atomic_file.h"
 #include "runtime/cancel.h"
 #include "runtime/cli_run.h"
+#include "runtime/report_html.h"
 #include "tools/commands.h"
 
 using namespace polyhex;
@@ -38,7 +40,7 @@ void add_run_options(CLI::App* c, RunRequest& req) {
   c->add_option("--threads,-j", req.threads, "worker threads (default: all cores)");
 }
 
-int cmd_run(const RunRequest& req) {
+int cmd_run(const RunRequest& req, bool html) {
   std::optional<RetryPlan> retry;
   Pipeline p = load_pipeline(req, &retry);
   RunResult r = run_with_retry(p, retry, req);
@@ -49,10 +51,12 @@ int cmd_run(const RunRequest& req) {
   }
   if (!r.error.empty()) {
     std::fprintf(stderr, "polyhex: error: %s\n", r.error.c_str());
-    std::fprintf(stderr, "polyhex: partial report in %s\n", (req.out_dir / "report.json").c_str());
+    std::fprintf(stderr, "polyhex: partial report in %s%s\n", (req.out_dir / "report.json").c_str(),
+                 html ? " (no report.html: the run wrote no mesh to show)" : "");
     return 1;
   }
   std::fprintf(stderr, "polyhex: done in %.2f s; report: %s\n", r.seconds, (req.out_dir / "report.json").c_str());
+  if (html) std::fprintf(stderr, "polyhex: wrote %s\n", write_report_html(req.out_dir).c_str());
   // A mesh a solver would reject is not a success: the final optimization or the quality report saw
   // inverted hexes.
   int code = 0;
@@ -108,9 +112,11 @@ const bool registered = register_commands([](CLI::App& app, std::vector<Command>
   auto* cache_opt =
       run->add_option("--cache", run_req->cache_dir, "artefact cache folder (default: .polyhex-cache beside the output folder)");
   run->add_flag("--no-cache", run_req->no_cache, "run every node; read and write no cache")->excludes(cache_opt);
-  out.push_back({run, [run_req] {
+  auto html = std::make_shared<bool>(false);
+  run->add_flag("--html", *html, "also write OUT/report.html at the end (as `polyhex report OUT` does)");
+  out.push_back({run, [run_req, html] {
                    run_req->verbosity = command_env().verbosity;
-                   return cmd_run(*run_req);
+                   return cmd_run(*run_req, *html);
                  }});
 
   auto graph_req = std::make_shared<RunRequest>();

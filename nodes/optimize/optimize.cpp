@@ -804,7 +804,13 @@ bool better_result(const OptimizeStats& a, const OptimizeStats& b) {
 }
 
 HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback, const SurfaceMesh& surface,
-                                   const OptimizeParams& p, OptimizeStats* stats, FallbackOutcome* outcome) {
+                                   const OptimizeParams& p, OptimizeStats* stats, FallbackOutcome* outcome,
+                                   const ProgressFn& progress) {
+  // The phases' shares of the bar: the shape improvement takes about 2/3 of the stage on the built-in
+  // shapes, a second or third candidate as long as the first's untangling and max-min.
+  auto report = [&](double fraction, const char* what) {
+    if (progress) progress(fraction, what);
+  };
   // Every candidate goes through (a)-(b''); the shape improvement (c), which never lowers the minimum nor
   // un-inverts, runs on the best one only. The first is the mesh with its boundary on the surface; if its
   // result is poor, the same mesh with crease lines (feature_angle), then the fallback mesh.
@@ -836,20 +842,26 @@ HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback,
   };
   OptimizeParams plain = p;
   plain.feature_angle = 0;
+  report(0, "untangling, max-min");
   improve(start(mesh, plain));
   const bool poor = cands[0].st.inverted_after > 0 || cands[0].st.sj_min_after < p.fallback_below_sj;
   Candidate* creases = nullptr;
   Candidate* fb = nullptr;
   if (poor && p.feature_angle > 0 && p.move_boundary) {
+    report(0.2, "candidate with crease lines");
     creases = &start(mesh, p);
     if (creases->st.crease_lines_snapped > 0) improve(*creases);
     else creases->opt.reset();  // no crease line to follow: the same as the first
   }
-  if (poor && fallback) improve(*(fb = &start(*fallback, plain)));
+  if (poor && fallback) {
+    report(0.27, "fallback candidate");
+    improve(*(fb = &start(*fallback, plain)));
+  }
   Candidate* best = &cands[0];
   for (Candidate& c : cands)
     if (c.opt && better_result(c.st, best->st)) best = &c;
   const auto tf = Clock::now();
+  report(0.33, "shape improvement");
   HexMesh out = best->opt->finish(best->mesh->source);
   summarise(out, best->st.sj_min_after, best->st.sj_avg_after, best->st.inverted_after);
   best->seconds += std::chrono::duration<double>(Clock::now() - tf).count();

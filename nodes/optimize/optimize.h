@@ -65,6 +65,7 @@
 #include <array>
 
 #include "nodes/artefacts/meshes.h"
+#include "runtime/progress.h"
 
 namespace polyhex {
 
@@ -155,9 +156,11 @@ struct FallbackOutcome {
 /// \param stats  the kept result's figures, seconds = the whole call
 /// \param fallback  null, or a second candidate for the same shape
 /// \param outcome  out: whether the crease candidate and the fallback ran and were kept, and their figures
+/// \param progress  told the phase (each candidate's untangling and max-min, the shape improvement); may be empty
 /// \throw as optimize_hexes
 HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback, const SurfaceMesh& surface,
-                                   const OptimizeParams& p, OptimizeStats* stats, FallbackOutcome* outcome = nullptr);
+                                   const OptimizeParams& p, OptimizeStats* stats, FallbackOutcome* outcome = nullptr,
+                                   const ProgressFn& progress = {});
 
 /// Regularised Winslow energy of one hex: Σ over its 8 corners of |J|_F² / (3 χ(det J, ε)^{2/3}), J the
 /// corner's edge vectors divided by `scale`; 8 for a cube of edge `scale` as ε -> 0.

@@ -58,7 +58,8 @@ const bool registered = register_node(make_node<P>(
       OptimizeStats s;
       FallbackOutcome fb;
       auto fallback = in.has(2) ? in.get<HexMesh>(2) : nullptr;
-      HexMesh out = optimize_hexes_or_fallback(*in.get<HexMesh>(0), fallback.get(), *in.get<SurfaceMesh>(1), p, &s, &fb);
+      HexMesh out = optimize_hexes_or_fallback(*in.get<HexMesh>(0), fallback.get(), *in.get<SurfaceMesh>(1), p, &s, &fb,
+                                               ctx.progress_fn());
       auto& j = ctx.metrics;
       // <name>_ran, _kept, and the figures of a candidate that ran
       auto candidate = [&](const std::string& name, bool ran, bool kept, const OptimizeStats& cs) {

@@ -74,7 +74,11 @@ double conformal_distortion(const Eigen::Vector3d& a, const Eigen::Vector3d& b, 
 
 PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetMesh& deformed,
                             std::shared_ptr<const PolyCubeSegmentation> seg_ptr, const PositionDeformParams& p,
-                            PositionDeformStats* stats_out) {
+                            PositionDeformStats* stats_out, const ProgressFn& progress) {
+  // The phases' shares of the bar: their times on the built-in shapes (the solves ~1/3, the untangling ~2/3).
+  auto report = [&](double fraction, const char* what) {
+    if (progress) progress(fraction, what);
+  };
   const TetMesh& input = *input_ptr;
   const PolyCubeSegmentation& seg = *seg_ptr;
   const int nV = int(input.V.rows());
@@ -394,6 +398,7 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
     for (int v = 0; v < nV; ++v)
       if (vgroup[v] >= 0) st.planarity_error = std::max(st.planarity_error, std::abs(out.U(v, a) - k[vgroup[v]] * h) / diag);
   };
+  report(0, "chart planes, Poisson and final solves");
   oneapi::tbb::parallel_for(0, 3, solve_axis);
   for (const PositionDeformStats& s : axis_stats) {
     st.merged_same_axis_charts += s.merged_same_axis_charts;
@@ -412,6 +417,7 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
 
   // Untangling (untangle_map.h): a vertex keeps the coordinates of the chart planes it lies on.
   if (p.untangle_iterations > 0) {
+    report(0.35, "untangling the map");
     std::vector<std::uint8_t> fixed_axes(size_t(nV), 0);
     for (Eigen::Index f = 0; f < seg.F.rows(); ++f) {
       const int a = label_axis(seg.charts[size_t(seg.chart[f])].label);
@@ -425,6 +431,7 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
     untangle_polycube_map(input.V, input.T, out.U, fixed_axes, up, &st.untangle);
   }
 
+  report(0.97, "distortion");
   // Inverted tets and distortion of input -> PolyCube. A few near-degenerate tets have distortions of
   // 1e10 and more, so the mean says nothing: report the median, the 99th percentile and the max.
   std::vector<double> dist(size_t(input.T.rows()), -1.0);

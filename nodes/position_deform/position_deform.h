@@ -49,6 +49,7 @@
 
 #include "nodes/artefacts/polycube_map.h"
 #include "nodes/position_deform/untangle_map.h"
+#include "runtime/progress.h"
 
 namespace polyhex {
 
@@ -99,9 +100,10 @@ struct PositionDeformStats {
 ///        input's volume / h³ (the hex count the lattice would give) exceeds p.max_hexes;
 ///        SolverError when a linear solve fails; ConfigError for an unknown final_solve, level_placement or map_polish;
 ///        Interrupted after SIGINT/SIGTERM (runtime/cancel.h), checked per axis and before each solve
+/// \param progress  told the phase (chart planes and solves, untangling, distortion); may be empty
 PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input, const TetMesh& deformed,
                             std::shared_ptr<const PolyCubeSegmentation> seg, const PositionDeformParams& p,
-                            PositionDeformStats* stats = nullptr);
+                            PositionDeformStats* stats = nullptr, const ProgressFn& progress = {});
 
 /// Conformal distortion ||J||_F ||J^-1||_F / 3 of the affine map taking tet (a,b,c,d) to (A,B,C,D);
 /// 1 for a similarity; +inf when either tet is degenerate or the map inverts.

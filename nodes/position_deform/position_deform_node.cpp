@@ -33,7 +33,8 @@ const bool registered = register_node(make_node<P>(
     artefact_name<PolyCubeMap>(),
     [](const P& p, const Inputs& in, NodeContext& ctx) {
       PositionDeformStats s;
-      PolyCubeMap m = position_deform(in.get<TetMesh>(0), *in.get<TetMesh>(1), in.get<PolyCubeSegmentation>(2), p, &s);
+      PolyCubeMap m = position_deform(in.get<TetMesh>(0), *in.get<TetMesh>(1), in.get<PolyCubeSegmentation>(2), p, &s,
+                                      ctx.progress_fn());
       auto& j = ctx.metrics;
       j["charts"] = s.charts;
       j["distance_pairs"] = s.distance_pairs;

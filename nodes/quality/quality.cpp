@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -56,6 +57,7 @@ std::uint64_t edge_key(int a, int b) {
 // Topological figures of hexcheck.py `topology()`.
 struct Topology {
   RowMatrixX4iQ boundary;  // #Q by 4
+  std::vector<char> irregular;  // #V: 1 for an irregular vertex (0 for an unused one)
   double irregular_pct = 0, irregular_interior_pct = 0, irregular_boundary_pct = 0;
   long unused_vertices = 0, faces_shared_by_more_than_two = 0, nonmanifold_boundary_edges = 0;
 };
@@ -148,6 +150,7 @@ Topology topology(const HexMesh& m) {
   }
 
   long n_used = 0, n_interior = 0, n_boundary = 0, irr_interior = 0, irr_boundary = 0;
+  t.irregular.assign(nv, 0);
   for (size_t v = 0; v < nv; ++v) {
     if (!used[v]) {
       ++t.unused_vertices;
@@ -156,10 +159,12 @@ Topology topology(const HexMesh& m) {
     ++n_used;
     if (on_boundary[v]) {
       ++n_boundary;
-      irr_boundary += boundary_count[v] != 4;
+      t.irregular[v] = boundary_count[v] != 4;
+      irr_boundary += t.irregular[v];
     } else {
       ++n_interior;
-      irr_interior += valence[v] != 6;
+      t.irregular[v] = valence[v] != 6;
+      irr_interior += t.irregular[v];
     }
   }
   t.irregular_pct = 100.0 * double(irr_interior + irr_boundary) / double(std::max(n_used, 1L));
@@ -259,6 +264,26 @@ void hex_scaled_jacobians(const HexMesh& mesh, Eigen::VectorXd& sj, Eigen::Vecto
     }
   });
 }
+
+Eigen::VectorXd hex_edge_ratios(const HexMesh& mesh) {
+  const Eigen::Index nh = mesh.H.rows();
+  Eigen::VectorXd ratio(nh);
+  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, nh, 1024), [&](const tbb::blocked_range<Eigen::Index>& r) {
+    for (Eigen::Index h = r.begin(); h < r.end(); ++h) {
+      const auto p = corners(mesh, h);
+      double lo = std::numeric_limits<double>::infinity(), hi = 0;
+      for (const auto& e : kEdges) {
+        const double l = (p[e[1]] - p[e[0]]).norm();
+        lo = std::min(lo, l);
+        hi = std::max(hi, l);
+      }
+      ratio[h] = lo > 0 ? hi / lo : std::numeric_limits<double>::infinity();
+    }
+  });
+  return ratio;
+}
+
+std::vector<char> irregular_vertices(const HexMesh& mesh) { return topology(mesh).irregular; }
 
 double hex_mesh_volume(const HexMesh& mesh) {
   const Eigen::Index nh = mesh.H.rows();

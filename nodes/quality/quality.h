@@ -76,6 +76,15 @@ HexSJ hex_scaled_jacobian(const std::array<Eigen::Vector3d, 8>& p, std::array<do
 /// \pre indices of mesh.H in range (see check_hex_mesh)
 void hex_scaled_jacobians(const HexMesh& mesh, Eigen::VectorXd& sj, Eigen::VectorXd& corner_min);
 
+/// Edge ratio of every hex (Verdict's hex edge ratio): its longest of the 12 edges over its shortest;
+/// +inf when an edge has zero length.
+/// \return #H, each >= 1   \pre indices of mesh.H in range
+Eigen::VectorXd hex_edge_ratios(const HexMesh& mesh);
+
+/// The irregular vertices, by the definition of HexQuality::irregular_pct (its numerator).
+/// \return #V: 1 for an irregular vertex, 0 for a regular or unused one   \pre indices of mesh.H in range
+std::vector<char> irregular_vertices(const HexMesh& mesh);
+
 /// Signed volume of the mesh: each hex as the 5 tets (0,1,3,4) (1,2,3,6) (1,3,4,6) (1,4,5,6) (3,4,6,7).
 /// \pre indices of mesh.H in range
 double hex_mesh_volume(const HexMesh& mesh);

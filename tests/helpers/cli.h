@@ -76,19 +76,24 @@ inline CliRun run_polyhex(const std::string& args) {
   return run_command(std::string(POLYHEX_BINARY) + " " + args + " 2>&1");
 }
 
-/// Runs `polyhex ARGS` with stdout into the file `out_file` and stderr into `err_file`, then reads both
-/// back into `out` and `err` (the files stay, for inspection).
-inline CliRun run_polyhex_to_files(const std::string& args, const std::filesystem::path& out_file,
+/// Runs the shell command `cmd` with stdout into the file `out_file` and stderr into `err_file`, then reads
+/// both back into `out` and `err` (the files stay, for inspection).
+inline CliRun run_command_to_files(const std::string& cmd, const std::filesystem::path& out_file,
                                    const std::filesystem::path& err_file) {
-  const std::string cmd =
-      std::string(POLYHEX_BINARY) + " " + args + " > '" + out_file.string() + "' 2> '" + err_file.string() + "'";
+  const std::string full = cmd + " > '" + out_file.string() + "' 2> '" + err_file.string() + "'";
   CliRun r;
   const auto t0 = std::chrono::steady_clock::now();
-  r.code = exit_code(std::system(cmd.c_str()));
+  r.code = exit_code(std::system(full.c_str()));
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   r.out = read_text(out_file);
   r.err = read_text(err_file);
   return r;
+}
+
+/// Runs `polyhex ARGS` as run_command_to_files does.
+inline CliRun run_polyhex_to_files(const std::string& args, const std::filesystem::path& out_file,
+                                   const std::filesystem::path& err_file) {
+  return run_command_to_files(std::string(POLYHEX_BINARY) + " " + args, out_file, err_file);
 }
 
 /// An empty folder `<temp>/polyhex_<name>_<pid>` (emptied if it exists). It is left in place after the

@@ -145,6 +145,8 @@ TEST_CASE("cli: retry runs the variants while no attempt is accepted and keeps t
     }
     CHECK(att[1]["set"]["tets.edge_length"] == 0.1);
     CHECK(rep["retry"]["chosen"] == best);
+    CHECK(rep["retry"]["min_sj"] == 1.0);  // the thresholds that judged the attempts (the HTML report shows them)
+    CHECK(rep["retry"]["max_inverted"] == 0);
     const json& q = rep["nodes"]["quality"]["metrics"];
     CHECK(q["sj_min"].get<double>() == att[best]["sj_min"].get<double>());
     // the written mesh is the chosen attempt's

@@ -351,3 +351,20 @@ TEST_CASE("the average ascent raises the average beyond the sweeps alone, keeps 
   CHECK(none.average_kept == 0);
   CHECK(none.sj_avg_after == Approx(off.sj_avg_after).epsilon(1e-12));
 }
+
+TEST_CASE("optimize reports its phases in order through the progress callback", "[optimize][progress]") {
+  const int n = 3;
+  HexMesh g = test::grid_hex_mesh(n, n, n);
+  g.V.row(21) += Eigen::RowVector3d(0.3, -0.2, 0.25);  // an interior vertex off its place
+  const SurfaceMesh s = test::voxel_surface(test::voxel_box(n, n, n));
+  std::vector<std::pair<double, std::string>> calls;
+  OptimizeStats st;
+  optimize_hexes_or_fallback(g, nullptr, s, {}, &st, nullptr,
+                             [&](double f, const std::string& what) { calls.emplace_back(f, what); });
+  REQUIRE(calls.size() == 2);  // a good result: no second candidate
+  CHECK(calls[0].second == "untangling, max-min");
+  CHECK(calls[1].second == "shape improvement");
+  CHECK(calls[0].first == 0);
+  CHECK(calls[1].first > calls[0].first);
+  CHECK(calls[1].first < 1);
+}

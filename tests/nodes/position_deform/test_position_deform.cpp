@@ -265,3 +265,17 @@ TEST_CASE("the mean value Laplace solve: diagonal preconditioner, incomplete LU 
   CHECK(jac.map.chart_plane == ilu.map.chart_plane);
   check_planes(jac);
 }
+
+TEST_CASE("position_deform reports its phases in order through the progress callback", "[position][progress]") {
+  Run r = run_pipeline(test::voxel_surface(test::voxel_box(3, 2, 2)), 0.2, PositionDeformParams{}, false);
+  std::vector<std::pair<double, std::string>> calls;
+  position_deform(r.tets, r.deformed, r.seg, PositionDeformParams{}, nullptr,
+                  [&](double f, const std::string& what) { calls.emplace_back(f, what); });
+  REQUIRE(calls.size() == 3);
+  CHECK(calls[0] == std::make_pair(0.0, std::string("chart planes, Poisson and final solves")));
+  CHECK(calls[1].second == "untangling the map");
+  CHECK(calls[2].second == "distortion");
+  CHECK(calls[0].first < calls[1].first);
+  CHECK(calls[1].first < calls[2].first);
+  CHECK(calls[2].first < 1);
+}

@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <random>
@@ -73,6 +74,39 @@ TEST_CASE("quality: a 3x3x3 grid has regular interior vertices, only its 8 corne
   for (Eigen::Index f = 0; f < b.F.rows(); ++f)
     vol6 += b.V.row(b.F(f, 0)).dot(b.V.row(b.F(f, 1)).cross(b.V.row(b.F(f, 2))));
   CHECK(vol6 / 6 == Approx(27.0));
+}
+
+TEST_CASE("quality: irregular_vertices flags exactly what irregular_pct counts", "[quality]") {
+  const HexMesh g = grid_hex_mesh(3, 3, 3);
+  const std::vector<char> irr = irregular_vertices(g);
+  REQUIRE(irr.size() == 64);
+  // The 8 corners of the block (3 boundary quads each) and nothing else.
+  std::set<int> flagged;
+  for (int v = 0; v < 64; ++v)
+    if (irr[size_t(v)]) flagged.insert(v);
+  CHECK(flagged == std::set<int>{0, 3, 12, 15, 48, 51, 60, 63});
+  // An unused vertex is not irregular; the share stays that of irregular_pct.
+  HexMesh u = g;
+  u.V.conservativeResize(65, 3);
+  u.V.row(64) << 9, 9, 9;
+  const std::vector<char> irr_u = irregular_vertices(u);
+  CHECK(irr_u[64] == 0);
+  CHECK(100.0 * double(std::count(irr_u.begin(), irr_u.end(), 1)) / 64 == Approx(measure(u).irregular_pct));
+}
+
+TEST_CASE("quality: the edge ratio of a hex is its longest edge over its shortest", "[quality]") {
+  CHECK(hex_edge_ratios(unit_cube_hex())[0] == 1.0);
+  RowMatrixX3d P = cube_corners();
+  P.col(0) *= 3.0;  // a 3 x 1 x 1 box
+  CHECK(hex_edge_ratios(one_hex(P))[0] == Approx(3.0).epsilon(1e-15));
+  P.bottomRows(4).col(0).array() += 4.0;  // the top slides by 4: slanted edges of length sqrt(17)
+  CHECK(hex_edge_ratios(one_hex(P))[0] == Approx(std::sqrt(17.0)).epsilon(1e-15));
+  RowMatrixX3d D = cube_corners();
+  D.row(1) = D.row(0);  // edge 0-1 collapsed
+  CHECK(std::isinf(hex_edge_ratios(one_hex(D))[0]));
+  const Eigen::VectorXd g = hex_edge_ratios(grid_hex_mesh(2, 3, 4, 0.5));
+  CHECK(g.size() == 24);
+  CHECK(g.maxCoeff() == Approx(1.0));
 }
 
 TEST_CASE("quality: a sheared hex has scaled Jacobian 1/sqrt(1+t^2)", "[quality]") {
