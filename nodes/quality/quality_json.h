@@ -12,8 +12,7 @@ namespace polyhex {
 /// Keys: hexes, vertices, inverted, sj_min, sj_avg, sj_corner_min, sj_corner_avg, sj_below_0_2, volume,
 /// irregular_pct, irregular_interior_pct, irregular_boundary_pct, unused_vertices,
 /// faces_shared_by_more_than_two, nonmanifold_boundary_edges, boundary_quads, and when q.has_surface
-/// also bbox_diag, hausdorff_mean, hausdorff_max, volume_ratio and hausdorff_sides ("symmetric", or
-/// "surface_to_mesh" against an open surface). The per-hex vectors are not included.
+/// also bbox_diag, hausdorff_mean, hausdorff_max, volume_ratio. The per-hex vectors are not included.
 inline nlohmann::json to_json(const HexQuality& q) {
   nlohmann::json j = {{"hexes", q.hexes},
                       {"vertices", q.vertices},
@@ -36,7 +35,6 @@ inline nlohmann::json to_json(const HexQuality& q) {
     j["hausdorff_mean"] = q.hausdorff_mean;
     j["hausdorff_max"] = q.hausdorff_max;
     j["volume_ratio"] = q.volume_ratio;
-    j["hausdorff_sides"] = q.surface_closed ? "symmetric" : "surface_to_mesh";
   }
   return j;
 }

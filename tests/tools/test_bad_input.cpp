@@ -80,13 +80,6 @@ TEST_CASE("cli bad input: bad surfaces exit 1 naming node `surface` and the file
       {"counts.off", "OFF\n5 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n", "line 7: truncated: the header announces 4 faces, the file ends after 0"},
       {"nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\n", "line 2: vertex 2 has a non-finite coordinate"},
       {"range.obj", kTetV + "f 1 3 2\nf 1 2 7\n", "line 6: vertex index 7 out of range (4 vertices)"},
-      {"flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 4\n", "face 0 (line 5) is degenerate: zero area"},
-      {"open.obj", kTetV + "f 1 3 2\nf 1 2 4\nf 1 4 3\n", "surface is not closed: 3 boundary edges"},
-      {"edge.obj", kTetV + "v 0 -1 0\nv 0 0 -1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\nf 1 5 2\nf 1 2 6\nf 1 6 5\nf 2 5 6\n",
-       "non-manifold: 1 edges are used by more than 2 triangles"},
-      {"pinch.obj",
-       kTetV + "v -1 0 0\nv 0 -1 0\nv 0 0 -1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\nf 1 5 6\nf 1 6 7\nf 1 7 5\nf 5 7 6\n",
-       "non-manifold vertex"},
   };
   for (const auto& c : cases) {
     SECTION(c.name) {
@@ -96,7 +89,50 @@ TEST_CASE("cli bad input: bad surfaces exit 1 naming node `surface` and the file
   }
 }
 
-TEST_CASE("cli bad input: a self-intersecting surface is stopped at node `tets`", "[cli][badinput]") {
+// Surfaces the reader passes on with their defects: the conditioning refuses what no repair makes a
+// solid, strict policy refuses every defect, and a config without the conditioning is stopped at
+// TetGen with the reader's message.
+TEST_CASE("cli bad input: defective surfaces are refused by `condition` or `tets`, naming the file", "[cli][badinput]") {
+  TempDir d("badinput_defects");
+  struct Case {
+    std::string name, content, strict_message, baseline_message;
+  };
+  const std::vector<Case> cases = {
+      {"flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 4\n", "degenerate triangle",
+       "cannot tetrahedralize a surface with 4 vertices"},
+      {"open.obj", kTetV + "f 1 3 2\nf 1 2 4\nf 1 4 3\n", "1 open boundary loop",
+       "cannot tetrahedralize a surface with 4 vertices"},
+      {"edge.obj", kTetV + "v 0 -1 0\nv 0 0 -1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\nf 1 5 2\nf 1 2 6\nf 1 6 5\nf 2 5 6\n",
+       "1 non-manifold edge", "non-manifold: 1 edges are used by more than 2 triangles"},
+      {"pinch.obj",
+       kTetV + "v -1 0 0\nv 0 -1 0\nv 0 0 -1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\nf 1 5 6\nf 1 6 7\nf 1 7 5\nf 5 7 6\n",
+       "1 pinch vertex", "non-manifold vertex"},
+  };
+  for (const auto& c : cases) {
+    SECTION(c.name) {
+      const fs::path in = write(d / c.name, c.content);
+      CliRun r = run_cli("run " + config("default.json") + " --input " + in.string() + " --out " +
+                         (d / ("strict_" + c.name)).string() + " --no-cache --set condition.policy=strict");
+      INFO(r.err);
+      CHECK(r.code == 1);
+      CHECK_THAT(r.err, Contains("node `condition` (`condition_surface/auto`)") && Contains(in.string() + ": ") &&
+                            Contains(c.strict_message) && Contains("refused by policy `strict`"));
+      check_nothing_written(d / ("strict_" + c.name));
+      expect_refused(config("baseline.json"), in, d / ("baseline_" + c.name), "node `tets` (`tetrahedralize/tetgen`)",
+                     c.baseline_message);
+    }
+  }
+  SECTION("what no repair makes a solid: three faces of a tetrahedron, two triangles in a plane") {
+    for (const std::string name : {"open.obj", "flat.obj"}) {
+      const fs::path in = write(d / name, cases[name == "open.obj" ? 1 : 0].content);
+      expect_refused(config("default.json"), in, d / ("auto_" + name), "node `condition` (`condition_surface/auto`)",
+                     "");
+    }
+  }
+}
+
+TEST_CASE("cli bad input: a self-intersecting surface is repaired, refused when strict, stopped at `tets` without "
+          "the conditioning", "[cli][badinput]") {
   TempDir d("badinput_selfx");
   // Two unit cubes overlapping: each closed and manifold, together self-intersecting.
   std::string s;
@@ -118,12 +154,25 @@ TEST_CASE("cli bad input: a self-intersecting surface is stopped at node `tets`"
     i = j + 1;
   }
   const fs::path in = write(d / "two_cubes.obj", s + f1), out = d / "out";
-  CliRun r = run_cli("run " + config("default.json") + " --input " + in.string() + " --out " + out.string() + " --no-cache");
+  CliRun r = run_cli("run " + config("baseline.json") + " --input " + in.string() + " --out " + out.string() + " --no-cache");
   INFO(r.err);
   CHECK(r.code == 1);
   CHECK_THAT(r.err, Contains("node `tets` (`tetrahedralize/tetgen`)") && Contains(in.string()) &&
                         Contains("the surface intersects itself"));
   check_nothing_written(out);
+  r = run_cli("run " + config("default.json") + " --input " + in.string() + " --out " + (d / "strict").string() +
+              " --no-cache --set condition.policy=strict");
+  CHECK(r.code == 1);
+  CHECK_THAT(r.err, Contains("node `condition`") && Contains("self-intersecting triangle pairs"));
+  check_nothing_written(d / "strict");
+  // the default repairs it (the union of the cubes) and meshes it
+  r = run_cli("run " + config("default.json") + " --input " + in.string() + " --out " + (d / "auto").string() +
+              " --no-cache --set vars.tet_edge=0.05 --set vars.hex_edge=0.04");
+  INFO(r.err);
+  CHECK(r.code == 0);
+  const json rep = json::parse(polyhex::test::read_text(d / "auto" / "report.json"));
+  CHECK(rep["nodes"]["condition"]["metrics"]["repair"] == "levelset");
+  CHECK(rep["nodes"]["quality"]["metrics"]["inverted"] == 0);
 }
 
 TEST_CASE("cli bad input: bad tet meshes exit 1 naming node and file", "[cli][badinput]") {

@@ -410,3 +410,33 @@ TEST_CASE("defective inputs mesh through the default pipeline with no inverted h
     CHECK(q["hausdorff_sides"] == (c.name == "holes" ? "surface_to_mesh" : "symmetric"));
   }
 }
+
+TEST_CASE("condition_surface on the shared models: girl.off repaired, the others as read", "[condition][shared]") {
+  const std::filesystem::path dir = std::filesystem::path(POLYHEX_SHARED_DIR) / "data" / "surfaces";
+  if (!std::filesystem::exists(dir)) {
+    WARN("skipped: " << dir << " not found");
+    SUCCEED();
+    return;
+  }
+  SECTION("girl.off intersects itself: the alpha wrap mends what the level set cannot") {
+    const SurfaceMesh girl = read_surface(dir / "girl.off");
+    ConditionReport r;
+    const SurfaceMesh out = condition_surface(girl, SurfaceRepair::automatic, {}, r);
+    CHECK(r.input.self_intersections > 0);
+    CHECK(r.repair == "alpha_wrap");
+    CHECK(r.remeshed);
+    CHECK(clean(out));
+    CHECK(r.deviation_to_original < 2.0);
+  }
+  SECTION("clean models pass through bit for bit") {
+    for (const char* name : {"bunny.off", "fandisk.off", "7-connected.stl", "in-volume_twist.stl"}) {
+      INFO(name);
+      const SurfaceMesh s = read_surface(dir / name);
+      ConditionReport r;
+      const SurfaceMesh out = condition_surface(s, SurfaceRepair::automatic, {}, r);
+      CHECK(r.passed_through);
+      CHECK(out.V == s.V);
+      CHECK(out.F == s.F);
+    }
+  }
+}

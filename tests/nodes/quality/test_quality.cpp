@@ -293,14 +293,25 @@ TEST_CASE("quality: invalid meshes are rejected with the reason", "[quality]") {
     s.source = "empty.obj";
     CHECK_THROWS_MATCHES(measure(m, &s), InvalidInput, Catch::Message("empty.obj: no triangles"));
   }
-  SECTION("flat open surface") {
+  SECTION("flat closed surface: a tetrahedron with its four corners in a plane") {
+    SurfaceMesh s;
+    s.V.resize(4, 3);
+    s.V << 0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0;
+    s.F.resize(4, 3);
+    s.F << 0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3;
+    s.source = "square.obj";
+    CHECK_THROWS_MATCHES(measure(m, &s), InvalidInput, Catch::Message("square.obj: the surface encloses no volume"));
+  }
+  SECTION("flat open surface: measured one-sided, no volume ratio") {
     SurfaceMesh s;
     s.V.resize(4, 3);
     s.V << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0;
     s.F.resize(2, 3);
     s.F << 0, 1, 2, 0, 2, 3;
     s.source = "square.obj";
-    CHECK_THROWS_MATCHES(measure(m, &s), InvalidInput, Catch::Message("square.obj: the surface encloses no volume"));
+    const HexQuality q = measure(m, &s);
+    CHECK_FALSE(q.surface_closed);
+    CHECK(q.volume_ratio == 0);
   }
 }
 
