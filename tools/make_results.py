@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Meshes every model of ../shared/data/surfaces (except girl.off, which self-intersects) with a polyhex
-config and writes docs/RESULTS.md: per model the hex quality, the PolyCube stages' figures and the time
+"""Meshes every model of ../shared/data/surfaces with a polyhex config (girl.off self-intersects: the
+surface conditioning repairs it) and writes docs/RESULTS.md: per model the hex quality, the PolyCube stages' figures and the time
 per stage, beside the 2011 paper's Table 1 and the best published PolyCube meshes (figures from
 ../shared/data/README.md). Each written mesh is cross-checked with ../shared/tools/hexcheck.py.
 
@@ -52,6 +52,23 @@ def hexcheck(mesh, surf):
     return json.loads(p.stdout) if p.returncode == 0 else None
 
 
+def summary(figures):
+    """Lines of the table's summary: over all models, and over the 28 without girl (the set of earlier runs)."""
+    out = []
+    for label, names in (("all models", sorted(figures)), ("the 28 without girl", sorted(k for k in figures if k != "girl"))):
+        vals = [figures[k] for k in names if figures[k][0] is not None]
+        if not vals:
+            continue
+        mins = sorted(v[0] for v in vals)
+        mid = len(mins) // 2
+        median = mins[mid] if len(mins) % 2 else (mins[mid - 1] + mins[mid]) / 2
+        out.append(f"Over {label} ({len(vals)} meshed): inverted hexes {sum(int(v[2] or 0) for v in vals)}, "
+                   f"mean average SJ {sum(v[1] for v in vals) / len(vals):.4f}, median minimum SJ {median:.3f}, "
+                   f"lowest minimum {mins[0]:.3f}.")
+        out.append("")
+    return out
+
+
 def fmt(x, spec=".3f"):
     return "–" if x is None else format(x, spec)
 
@@ -69,10 +86,11 @@ def main():
     ap.add_argument("--reuse", action="store_true", help="reuse OUT/<model>/report.json where it exists (regenerate the doc only)")
     args = ap.parse_args()
 
-    surfaces = sorted(p for p in (SHARED / "data" / "surfaces").iterdir() if p.stem != "girl")
+    surfaces = sorted((SHARED / "data" / "surfaces").iterdir())
     if args.models:
         surfaces = [p for p in surfaces if p.stem in args.models]
     rows, stage_rows, check_rows = [], [], []
+    figures = {}  # model -> (sj_min, sj_avg, inverted), for the summary
     for surf in surfaces:
         name = surf.stem
         out = Path(args.out) / name
@@ -94,8 +112,15 @@ def main():
             each = [fmt(a.get("sj_min")) + (f" ({int(a['inverted'])} inv.)" if a.get("inverted") else "")
                     for a in retry["attempts"]]
             attempts = " / ".join(each) + ("" if len(each) == 1 else f"; kept {retry['chosen'] + 1}")
-        rows.append("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |".format(
-            name, m("tets", "tets"), m("segment", "charts"), q.get("hexes"), q.get("inverted"),
+        figures[name] = (q.get("sj_min"), q.get("sj_avg"), q.get("inverted"))
+        cond = n.get("condition", {}).get("metrics", {})
+        conditioning = "–" if not cond else (
+            "as read" if cond.get("passed_through") else
+            (cond.get("repair") if cond.get("repair") != "none" else "") +
+            (" + " if cond.get("repair") != "none" and cond.get("remeshed") else "") +
+            (f"remeshed ({cond['input']['tessellation_ratio']:.1f}x finer)" if cond.get("remeshed") else ""))
+        rows.append("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |".format(
+            name, conditioning, m("tets", "tets"), m("segment", "charts"), q.get("hexes"), q.get("inverted"),
             fmt(q.get("sj_min")), fmt(q.get("sj_avg")), fmt(q.get("irregular_pct"), ".1f"),
             fmt(q.get("hausdorff_mean", 0) * 1e3, ".2f") + " / " + fmt(q.get("hausdorff_max", 0) * 1e3, ".1f"),
             f"{rep['seconds']:.1f}", attempts,
@@ -125,8 +150,10 @@ def main():
            " diagonal, in 1e-3). `paper` is the 2011 paper's Table 1 (min / avg SJ), `best` the best published PolyCube mesh"
            " listed in `../shared/data/README.md` (min / avg SJ). `attempts`: the SJ min of each attempt of the config's"
            " `retry` block (runtime/cli_run.h) and the one kept; `time s` is the time of all attempts.", "",
-           "| model | tets | charts | hexes | inverted | SJ min | SJ avg | irregular % | Hausdorff mean / max (1e-3) | time s | attempts | paper min / avg | best min / avg |",
-           "|---|---|---|---|---|---|---|---|---|---|---|---|---|"] + rows + [
+           " `conditioning`: what the surface conditioning did (`as read`: passed through bit for bit; the repair; remeshed"
+           " to the tet size when the input was more than 4 times finer).", "",
+           "| model | conditioning | tets | charts | hexes | inverted | SJ min | SJ avg | irregular % | Hausdorff mean / max (1e-3) | time s | attempts | paper min / avg | best min / avg |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"] + rows + [""] + summary(figures) + [
            "", "## PolyCube stages", "",
            "| model | alignment after §4 | charts | corners | splits (multi-orientation / wedge / ramp / order cycle) | inverted tets of the map: final solve -> untangled (flat: 4 vertices on a plane or 3 on an edge) | map distortion (median) | chart pairs out of order | planarity error | seconds per stage |",
            "|---|---|---|---|---|---|---|---|---|---|"] + stage_rows + [

@@ -65,7 +65,7 @@ struct ConditionParams {
   std::string remesh = "auto";  ///< auto: when tessellation_ratio > remesh_finer_than; never; always
   double edge_length = 0.02;      ///< tet edge, fraction of the bounding-box diagonal (as tetrahedralize's)
   double hex_edge_length = 0.01;  ///< hex edge, fraction of the bounding-box diagonal (costs, voxel, bounds)
-  double remesh_finer_than = 3.0; ///< remesh when the tessellation is this many times finer than the tets
+  double remesh_finer_than = 4.0; ///< remesh when the tessellation is this many times finer than the tets
   double feature_angle = 35;      ///< degrees: sharp edges kept by the remeshing
   int remesh_iterations = 3;      ///< isotropic remeshing iterations
   double voxel = 0.25;            ///< level-set voxel, in hex edges
