@@ -52,7 +52,8 @@ NodeSpec condition_node(const std::string& variant, SurfaceRepair repair, const 
           .add("max_hole_perimeter", &ConditionParams::max_hole_perimeter,
                "local repair fills holes up to this perimeter, in hex edges", 0.0, 1e6)
           .add("max_deviation", &ConditionParams::max_deviation,
-               "refuse a result farther than this from the original, in hex edges", 0.01, 1e6)
+               "refuse a level set, wrap or remesh straying farther than this from the original, in hex edges", 0.01,
+               1e6)
           .add("min_thickness", &ConditionParams::min_thickness,
                "refuse a result thinner than this (4 volume / area), in hex edges", 0.0, 1e6),
       {{"surface", artefact_name<SurfaceMesh>()}}, artefact_name<SurfaceMesh>(),
