@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <numeric>
+#include <optional>
 #include <set>
 
 #include "nodes/condition_surface/surface_ops.h"
@@ -91,8 +92,9 @@ struct Topology {
     nb.assign(size_t(3 * nf), -1);
     UnionFind faces{size_t(nf)};
     for (size_t i = 0; i < h.size();) {
-      size_t j = i;
-      while (j < h.size() && h[j].key == h[i].key) ++j;
+      // the run of half-edges on one edge; their triangles are connected
+      size_t j = i + 1;
+      for (; j < h.size() && h[j].key == h[i].key; ++j) faces.unite(h[i].he / 3, h[j].he / 3);
       if (j - i == 1) {
         ++boundary_edges;
         boundary.emplace_back(int(h[i].key >> 32), int(h[i].key & 0xffffffffu));
@@ -102,7 +104,6 @@ struct Topology {
       } else {
         ++nonmanifold_edges;
       }
-      for (size_t k = i + 1; k < j; ++k) faces.unite(h[i].he / 3, h[k].he / 3);
       i = j;
     }
     std::set<int> roots;
@@ -452,6 +453,9 @@ SurfaceMesh condition_surface(const SurfaceMesh& s, SurfaceRepair repair, const 
     throw InvalidInput(name + ": " + join(defects) +
                        "; refused by policy `strict` (policy `auto` repairs it)");
   report.passed_through = false;
+  // The diagnosis of `m` below as it stands, when it has one (each runs CGAL's self-intersection test:
+  // once per mesh).
+  std::optional<SurfaceDiagnosis> current;
 
   // Remeshing to size. Triangles of the tet size can cross where two parts of the surface come
   // closer than that (a level set's narrow gaps, thin plates): then finer targets, down to half.
@@ -460,7 +464,9 @@ SurfaceMesh condition_surface(const SurfaceMesh& s, SurfaceRepair repair, const 
     for (double target = T; target > T / 2.1; target /= std::sqrt(2.0)) {
       SurfaceMesh r = isotropic_remesh(m, target, p.feature_angle, p.remesh_iterations, report.feature_edges);
       throw_if_interrupted();
-      if (!diagnose_surface(r, H, T).defective()) {
+      SurfaceDiagnosis d = diagnose_surface(r, H, T);
+      if (!d.defective()) {
+        current = std::move(d);
         report.remesh_edge = target / T;
         report.remeshed = true;
         m = std::move(r);
@@ -478,6 +484,7 @@ SurfaceMesh condition_surface(const SurfaceMesh& s, SurfaceRepair repair, const 
     auto attempt = [&](SurfaceRepair r) {
       report.repair = repair_name(r);
       report.remeshed = false;
+      current.reset();
       try {
         if (r == SurfaceRepair::local) {
           m = local_repair(s, p.max_hole_perimeter * H, report);
@@ -500,7 +507,8 @@ SurfaceMesh condition_surface(const SurfaceMesh& s, SurfaceRepair repair, const 
         return false;
       }
       throw_if_interrupted();
-      return !diagnose_surface(m, H, T).defective();
+      if (!current) current = diagnose_surface(m, H, T);  // the level set's remesh diagnosed it already
+      return !current->defective();
     };
     std::vector<SurfaceRepair> order = {repair};
     if (repair == SurfaceRepair::automatic) {
@@ -512,8 +520,7 @@ SurfaceMesh condition_surface(const SurfaceMesh& s, SurfaceRepair repair, const 
     bool clean = false;
     for (SurfaceRepair r : order) {
       if ((clean = attempt(r))) break;
-      const SurfaceDiagnosis left = diagnose_surface(m, H, T);
-      failed.push_back(report.repair + ": " + (left.defective() ? "leaves " + join(left.defects()) : how));
+      failed.push_back(report.repair + ": " + (current && current->defective() ? "leaves " + join(current->defects()) : how));
     }
     if (!clean)
       throw InvalidInput(name + ": " + join(defects) + "; no repair leaves a clean surface (" + join(failed) + ")" +
@@ -521,11 +528,11 @@ SurfaceMesh condition_surface(const SurfaceMesh& s, SurfaceRepair repair, const 
     for (const std::string& f : failed) report.warnings.push_back(name + ": tried " + f);
   }
   // A wrap is remeshed too: its triangles follow the wrapping, not the size the tets need.
-  if (!report.remeshed && (defects.empty() || report.repair == "alpha_wrap" || too_fine(diagnose_surface(m, H, T))) &&
+  if (!report.remeshed && (defects.empty() || report.repair == "alpha_wrap" || too_fine(*current)) &&
       !remesh_to_size(m))
     report.warnings.push_back(name + ": remeshing to size leaves crossing triangles down to half the tet "
                                      "edge: the surface keeps its own tessellation");
-  report.output = diagnose_surface(m, H, T);
+  report.output = current ? *current : report.input;  // no diagnosis: m is still the input
   if (report.output.defective())
     throw InvalidInput(name + ": " + (defects.empty() ? std::string("remeshing to size") : join(defects) + ": " + how) +
                        (report.remeshed ? " and remeshing to size" : "") + " leaves " + join(report.output.defects()));
