@@ -284,24 +284,6 @@ int split_pinches(SurfaceMesh& s, const Topology& topo) {
   return split;
 }
 
-double signed_volume(const SurfaceMesh& s) {
-  const Eigen::RowVector3d c = s.V.colwise().mean();
-  double vol = 0;
-  for (Eigen::Index f = 0; f < s.F.rows(); ++f) {
-    const Vec3 a = (s.V.row(s.F(f, 0)) - c).transpose(), b = (s.V.row(s.F(f, 1)) - c).transpose(),
-               d = (s.V.row(s.F(f, 2)) - c).transpose();
-    vol += a.dot(b.cross(d)) / 6.0;
-  }
-  return vol;
-}
-
-double total_area(const SurfaceMesh& s) {
-  double a = 0;
-  for (Eigen::Index f = 0; f < s.F.rows(); ++f)
-    a += 0.5 * (corner(s, f, 1) - corner(s, f, 0)).cross(corner(s, f, 2) - corner(s, f, 0)).norm();
-  return a;
-}
-
 const char* repair_name(SurfaceRepair r) {
   switch (r) {
     case SurfaceRepair::local: return "local";
@@ -422,6 +404,7 @@ SurfaceDiagnosis diagnose_surface(const SurfaceMesh& s, double hex_edge, double 
       s.V.rows() ? Eigen::RowVector3d(s.V.colwise().maxCoeff() - s.V.colwise().minCoeff()) : Eigen::RowVector3d::Zero();
   const double box = ext.prod();
   d.volume = box > 0 ? std::abs(vol) / box : 0;
+  d.thickness = area > 0 ? 4 * std::abs(vol) / area / hex_edge : 0;
   if (t.nonmanifold_edges == 0 && t.boundary_edges == 0 && t.degenerate == 0 && t.duplicates == 0 &&
       d.nonmanifold_vertices == 0)
     d.self_intersections = count_self_intersections(s);
@@ -539,8 +522,7 @@ SurfaceMesh condition_surface(const SurfaceMesh& s, SurfaceRepair repair, const 
   SurfaceReadReport oriented;
   check_and_repair_surface(m, name, oriented);
 
-  const double volume = std::abs(signed_volume(m)), area = total_area(m);
-  const double thickness = 4 * volume / area / H;
+  const double thickness = report.output.thickness;
   if (thickness < p.min_thickness)
     throw InvalidInput(name + ": " + (defects.empty() ? std::string("the surface") : "the " + report.repair + " repair") +
                        " encloses a solid thinner than a hex edge (4 volume / area = " + fixed(thickness, 3) +

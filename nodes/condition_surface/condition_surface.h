@@ -45,6 +45,8 @@ struct SurfaceDiagnosis {
   double volume = 0;              ///< enclosed volume of the consistently oriented surface, fraction of
                                   ///< its bounding box's volume (meaningful only when closed)
   double area = 0;                ///< total area, in hex edges squared
+  double thickness = 0;           ///< 4 volume / area, in hex edges: the diameter of a rod, twice a
+                                  ///< plate's thickness (meaningful only when closed)
   /// How much finer the input is than the tet size asks: sqrt of the triangles the input forces on
   /// the tet mesher (each triangle's area over the square of its smallest altitude, capped at the
   /// tet edge) over those a tessellation at the tet size gives: 1 at the tet size, k for edges k

@@ -23,6 +23,7 @@ void diagnosis_metrics(const SurfaceDiagnosis& d, json& m) {
        {"components", d.components},
        {"volume_of_bbox", d.volume},
        {"area_hex_edges2", d.area},
+       {"thickness_hex_edges", d.thickness},
        {"tessellation_ratio", d.tessellation_ratio},
        {"defects", d.defects()}};
 }
