@@ -8,6 +8,7 @@
 #include <optional>
 #include <set>
 
+#include "nodes/algorithms/reference_length.h"
 #include "nodes/condition_surface/surface_ops.h"
 #include "nodes/io/surface_io.h"
 #include "nodes/quality/quality.h"
@@ -21,10 +22,6 @@ namespace {
 using Vec3 = Eigen::Vector3d;
 
 Vec3 corner(const SurfaceMesh& s, Eigen::Index f, int k) { return s.V.row(s.F(f, k)).transpose(); }
-
-double bbox_diagonal(const SurfaceMesh& s) {
-  return s.V.rows() ? (s.V.colwise().maxCoeff() - s.V.colwise().minCoeff()).norm() : 0.0;
-}
 
 bool zero_area(const SurfaceMesh& s, Eigen::Index f) {
   const Vec3 p0 = corner(s, f, 0), p1 = corner(s, f, 1), p2 = corner(s, f, 2);
@@ -418,7 +415,8 @@ SurfaceMesh condition_surface(const SurfaceMesh& s, SurfaceRepair repair, const 
   report = ConditionReport{};
   const std::string& name = s.source;
   if (s.F.rows() == 0) throw InvalidInput(name + ": no triangles");
-  const double diag = bbox_diagonal(s);
+  if (s.V.rows() == 0) throw InvalidInput(name + ": no vertices");
+  const double diag = reference_length(s.V);
   if (!(diag > 0)) throw InvalidInput(name + ": all vertices at one point");
   const double H = p.hex_edge_length * diag, T = p.edge_length * diag;
   report.input = diagnose_surface(s, H, T);

@@ -65,8 +65,8 @@ enum class SurfaceRepair { automatic, local, levelset, alpha_wrap };
 struct ConditionParams {
   std::string policy = "auto";  ///< auto: repair defects, with a warning; strict: refuse any defect
   std::string remesh = "auto";  ///< auto: when tessellation_ratio > remesh_finer_than; never; always
-  double edge_length = 0.02;      ///< tet edge, fraction of the bounding-box diagonal (as tetrahedralize's)
-  double hex_edge_length = 0.01;  ///< hex edge, fraction of the bounding-box diagonal (costs, voxel, bounds)
+  double edge_length = 0.02;      ///< tet edge, fraction of the reference length (as tetrahedralize's)
+  double hex_edge_length = 0.01;  ///< hex edge, fraction of the reference length (costs, voxel, bounds)
   double remesh_finer_than = 4.0; ///< remesh when the tessellation is this many times finer than the tets
   double feature_angle = 35;      ///< degrees: sharp edges kept by the remeshing
   int remesh_iterations = 3;      ///< isotropic remeshing iterations

@@ -38,9 +38,9 @@ NodeSpec condition_node(const std::string& variant, SurfaceRepair repair, const 
           .add_choice("remesh", &ConditionParams::remesh, {"auto", "never", "always"},
                       "remesh to the tet size: auto (when finer than remesh_finer_than), never, always")
           .add("edge_length", &ConditionParams::edge_length,
-               "tet edge, fraction of the bbox diagonal (the tetrahedralize node's; configs: ${tet_edge})", 0.002, 0.5)
+               "tet edge, fraction of the reference length (the tetrahedralize node's; configs: ${tet_edge})", 0.002, 0.5)
           .add("hex_edge_length", &ConditionParams::hex_edge_length,
-               "hex edge, fraction of the bbox diagonal (unit of the costs and bounds; configs: ${hex_edge})", 0.001,
+               "hex edge, fraction of the reference length (unit of the costs and bounds; configs: ${hex_edge})", 0.001,
                0.5)
           .add("remesh_finer_than", &ConditionParams::remesh_finer_than,
                "remesh when the tessellation is this many times finer than the tet edge", 1.0, 1000.0)

@@ -17,6 +17,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "nodes/algorithms/reference_length.h"
 #include "nodes/io/surface_io.h"
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
@@ -43,7 +44,7 @@ struct Surface {
   std::vector<Vec3> normal;                                // unit triangle normals
   std::vector<double> area;
   double total_area = 0;
-  double diag = 0;      // bbox diagonal of the used vertices
+  double diag = 0;      // reference length of the used vertices (nodes/algorithms/reference_length.h)
   double mean_edge = 0;
 
   int nf() const { return int(F->rows()); }
@@ -92,20 +93,18 @@ Surface build_surface(const RowMatrixX3d& V, const RowMatrixX3i& F) {
   s.vert_tris.assign(nv, {});
   s.normal.resize(nf);
   s.area.resize(nf);
-  Vec3 lo = Vec3::Constant(kInf), hi = Vec3::Constant(-kInf);
   for (int t = 0; t < nf; ++t) {
     Vec3 a = s.pos(F(t, 0)), b = s.pos(F(t, 1)), c = s.pos(F(t, 2));
     Vec3 n = (b - a).cross(c - a);
     s.area[t] = 0.5 * n.norm();
     s.normal[t] = s.area[t] > 0 ? Vec3(n.normalized()) : Vec3::Zero();
     s.total_area += s.area[t];
-    for (int k = 0; k < 3; ++k) {
-      s.vert_tris[F(t, k)].push_back(t);
-      lo = lo.cwiseMin(s.pos(F(t, k)));
-      hi = hi.cwiseMax(s.pos(F(t, k)));
-    }
+    for (int k = 0; k < 3; ++k) s.vert_tris[F(t, k)].push_back(t);
   }
-  s.diag = (hi - lo).norm();
+  std::vector<int> used;  // the boundary's vertices
+  for (int v = 0; v < nv; ++v)
+    if (!s.vert_tris[size_t(v)].empty()) used.push_back(v);
+  s.diag = reference_length(V(used, Eigen::all));
   double len = 0;
   for (auto& e : s.edges) len += (s.pos(e.v[0]) - s.pos(e.v[1])).norm();
   s.mean_edge = len / double(s.edges.size());

@@ -65,14 +65,14 @@ namespace polyhex {
 
 struct PolyCubeSegmentParams {
   int smoothing_iterations = 3;        ///< passes of area-weighted normal averaging over edge neighbours before labelling
-  double hex_edge_length = 0.01;       ///< target hex edge, fraction of the bbox diagonal: width of multi-orientation separating charts (§5.1)
+  double hex_edge_length = 0.01;       ///< target hex edge, fraction of the reference length (nodes/algorithms/reference_length.h): width of multi-orientation separating charts (§5.1)
   double small_chart_area = 0.005;     ///< a chart bounded by <= small_chart_edges edges is removed below this fraction of the surface area
   int small_chart_edges = 2;           ///< charts bounded by at most this many PolyCube edges are removal candidates (§5.1: two)
   bool split_multi_orientation = true; ///< split charts touching their opposite direction by a separating chart
   bool split_wedges = true;            ///< cut highly non-planar charts at wedge tips
   int edge_smoothing_iterations = 10;  ///< Laplacian passes on copies of the chart edges before the extremum search
   double extremum_depth = 2.0;         ///< an edge doubles back only when it returns by this many hex edge lengths
-  double wedge_min_severity = 1e-3;    ///< wedges whose triangle area is below this fraction of bbox diagonal^2 are left alone
+  double wedge_min_severity = 1e-3;    ///< wedges whose triangle area is below this fraction of the reference length^2 are left alone
   int max_cut_candidates = 200;        ///< cut candidates tested per wedge, cheapest first
   bool split_ramps = true;             ///< cut charts that climb far along their own axis (extension of §5.1, below)
   double ramp_extent = 12.0;           ///< a chart is a ramp when its vertices span more than this many hex edges along its axis
@@ -106,7 +106,7 @@ RowMatrixX3i boundary_triangles(const TetMesh& mesh);
 PolyCubeSegmentation segment_polycube(const TetMesh& deformed, const PolyCubeSegmentParams& p = {});
 
 /// Same-axis chart pairs of `seg` whose order evidence on `deformed` closes a cycle (chart_order.h),
-/// at hex edge hex_edge_length × the boundary's bbox diagonal: what split_order_cycles reduces.
+/// at hex edge hex_edge_length × the boundary's reference length: what split_order_cycles reduces.
 /// \pre seg was made on deformed (its triangles index deformed.V), hex_edge_length > 0
 /// \throw InvalidInput when seg has no labelled triangles or a triangle index is out of range
 int count_order_cycles(const TetMesh& deformed, const PolyCubeSegmentation& seg, double hex_edge_length);

@@ -34,7 +34,7 @@ const bool registered = register_node(make_node<P>(
     "PolyCube structure of the deformed tet mesh (§5.1): labels, charts, clean-up, multi-orientation, wedge and ramp splits",
     ParamSet<P>()
         .add("smoothing_iterations", &P::smoothing_iterations, "normal smoothing passes before labelling", 0, 1000)
-        .add("hex_edge_length", &P::hex_edge_length, "target hex edge, fraction of bbox diagonal (separating chart width)",
+        .add("hex_edge_length", &P::hex_edge_length, "target hex edge, fraction of the reference length (separating chart width)",
              1e-5, 0.5)
         .add("small_chart_area", &P::small_chart_area, "small chart: area below this fraction of the surface", 0, 1)
         .add("small_chart_edges", &P::small_chart_edges, "small chart: bounded by at most this many edges", 0, 100)
@@ -43,7 +43,7 @@ const bool registered = register_node(make_node<P>(
         .add("edge_smoothing_iterations", &P::edge_smoothing_iterations, "smoothing passes on chart edge copies", 0,
              10000)
         .add("extremum_depth", &P::extremum_depth, "an edge doubles back by at least this many hex edges", 0, 1e6)
-        .add("wedge_min_severity", &P::wedge_min_severity, "minimum wedge area, fraction of bbox diagonal^2", 0, 1)
+        .add("wedge_min_severity", &P::wedge_min_severity, "minimum wedge area, fraction of the reference length^2", 0, 1)
         .add("max_cut_candidates", &P::max_cut_candidates, "cut candidates tested per wedge", 1, 100000)
         .add("split_ramps", &P::split_ramps, "cut charts that climb far along their own axis (extension)")
         .add("ramp_extent", &P::ramp_extent, "a ramp spans more than this many hex edges along its axis", 0, 1e6)

@@ -1,5 +1,6 @@
 #include "nodes/position_deform/position_deform.h"
 
+#include "nodes/algorithms/reference_length.h"
 #include "nodes/polycube_segment/chart_order.h"
 
 #include <Eigen/Dense>
@@ -101,7 +102,7 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
   PositionDeformStats st;
   st.charts = nC;
   const RowMatrixX3d& Vd = deformed.V;
-  const double diag = (input.V.colwise().maxCoeff() - input.V.colwise().minCoeff()).norm();
+  const double diag = reference_length(input.V);
   const double h = p.edge_length * diag;
   const double min_d = 2.0 * h, sigma = 3.0 * min_d;
   {

@@ -54,7 +54,7 @@
 namespace polyhex {
 
 struct PositionDeformParams {
-  double edge_length = 0.01;        ///< hex edge length h, fraction of the input's bbox diagonal (§6: 1 %), [1e-4, 0.5]
+  double edge_length = 0.01;        ///< hex edge length h, fraction of the input's reference length (nodes/algorithms/reference_length.h) (§6: 1 %), [1e-4, 0.5]
   double distance_weight = 1.0;     ///< scale s of the distance-preservation constraints (0 disables them), [0, 1e6]
   std::string final_solve = "mvc_laplace";  ///< "mvc_laplace" (§5.2) or "poisson"
   std::string level_placement = "balanced";  ///< chart levels: "balanced" (chart_order.h place_levels) or "push_up"

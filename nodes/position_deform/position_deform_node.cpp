@@ -13,7 +13,7 @@ const bool registered = register_node(make_node<P>(
     "position_deform/chart_planes",
     "§5.2 PolyCube map: charts onto integer planes (hex edge units), distance constraints, MVC Laplace",
     ParamSet<P>()
-        .add("edge_length", &P::edge_length, "hex edge length, fraction of the input's bbox diagonal", 1e-4, 0.5)
+        .add("edge_length", &P::edge_length, "hex edge length, fraction of the input's reference length", 1e-4, 0.5)
         .add("distance_weight", &P::distance_weight, "scale of the same-axis chart distance constraints (0 = off)", 0.0, 1e6)
         .add_choice("final_solve", &P::final_solve, {"mvc_laplace", "poisson"},
                     "final solve with pinned charts: mean value Laplace (paper) or Poisson")

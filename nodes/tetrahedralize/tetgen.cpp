@@ -16,6 +16,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "nodes/algorithms/reference_length.h"
 #include "nodes/io/surface_io.h"
 #include "runtime/errors.h"
 
@@ -250,8 +251,10 @@ TetEstimate estimate_tets(const SurfaceMesh& surface, double edge_length) {
                c = (surface.V.row(surface.F(f, 2)) - n.centre) / n.scale;
     vol += a.dot(b.cross(c)) / 6.0;
   }
-  const double h_unit = edge_length;  // the target edge in normalized units (diagonal 1)
-  e.h = edge_length * n.scale;
+  // The target edge in normalized units (box diagonal 1): edge_length of the reference length.
+  e.reference_length = reference_length(surface.V);
+  const double h_unit = edge_length * (e.reference_length / n.scale);
+  e.h = h_unit * n.scale;
   e.volume = std::abs(vol) * n.scale * n.scale * n.scale;
   // TetGen's tets come out smaller than its volume bound (1.5 regular tets): measured on a box, the
   // mean tet is the volume of a regular tet of edge h divided by 1.4-1.7.
@@ -268,8 +271,8 @@ TetMesh tetrahedralize(const SurfaceMesh& surface, const TetgenParams& p, Tetgen
   const TetEstimate estimate = estimate_tets(surface, p.edge_length);
   check_size(estimate, p, who);
   const Normalization norm(surface.V);
-  const double h = p.edge_length * norm.scale;  // absolute target edge
-  const double h_unit = p.edge_length;          // in normalized coordinates
+  const double h = estimate.h;               // absolute target edge
+  const double h_unit = p.edge_length * (estimate.reference_length / norm.scale);  // in normalized coordinates
 
   // Normalized coordinates, rounded to multiples of 2^-36 (1.5e-11 of the diagonal): a model scaled by
   // 1e-9 normalizes to numbers a few ulps away from the unit model's, and the rounding makes them

@@ -8,7 +8,7 @@
 namespace polyhex {
 
 struct TetgenParams {
-  double edge_length = 0.02;   ///< target tet edge length, fraction of the input bounding-box diagonal
+  double edge_length = 0.02;   ///< target tet edge length, fraction of the input's reference length (nodes/algorithms/reference_length.h)
   double radius_edge = 1.5;    ///< quality bound on circumradius / shortest edge (TetGen -q<ratio>)
   double min_dihedral = 10.0;  ///< dihedral angle bound in degrees (TetGen -q<ratio>/<angle>)
   bool refine_surface = true;  ///< false keeps the input surface triangles untouched (TetGen -Y)
@@ -18,7 +18,8 @@ struct TetgenParams {
 /// The size of a tet mesh before it is made, to refuse requests far beyond the machine.
 struct TetEstimate {
   double volume = 0;       ///< volume enclosed by the surface (|signed volume|)
-  double h = 0;            ///< absolute target edge: edge_length x bbox diagonal
+  double reference_length = 0;  ///< the surface's reference length (nodes/algorithms/reference_length.h)
+  double h = 0;            ///< absolute target edge: edge_length x reference length
   double tets = 0;         ///< estimated tet count: 1.5 x volume / volume of a regular tet of edge h
   double bytes = 0;        ///< estimated peak memory of the TetGen run: tets x kTetgenBytesPerTet
 };
@@ -31,7 +32,7 @@ constexpr double kTetgenBytesPerTet = 250.0;
 struct TetgenStats {
   long tets = 0;
   long vertices = 0;
-  double target_edge = 0;        ///< h, absolute target edge length (edge_length x bbox diagonal)
+  double target_edge = 0;        ///< h, absolute target edge length (edge_length x reference length)
   double edge_min = 0;           ///< shortest edge / h
   double edge_max = 0;           ///< longest edge / h
   double edge_mean = 0;          ///< mean edge / h (each edge counted once)
@@ -43,7 +44,8 @@ struct TetgenStats {
 };
 
 /// Tetrahedralizes the solid bounded by a closed surface with TetGen (flags `pq<ratio>/<angle>a<vol>zQ`,
-/// plus `Y` when refine_surface is false). h = edge_length x bbox diagonal; the volume bound is 1.5
+/// plus `Y` when refine_surface is false). h = edge_length x the surface's reference length
+/// (its tightest bounding-box diagonal over all orientations, so that a turned copy gets the same tets); the volume bound is 1.5
 /// times that of a regular tet of edge h (1.5 x 0.118 h^3), which puts the mean interior edge at
 /// about h. Long thin input triangles (coarse CAD tessellations) are split by TetGen's own boundary
 /// refinement (-q without -Y), which gives isotropic tets there; with refine_surface = false they are

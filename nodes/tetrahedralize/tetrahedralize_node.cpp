@@ -9,7 +9,7 @@ namespace {
 const bool registered = register_node(make_node<TetgenParams>(
     "tetrahedralize/tetgen", "TetGen isotropic tet mesh of a closed surface",
     ParamSet<TetgenParams>()
-        .add("edge_length", &TetgenParams::edge_length, "target tet edge, fraction of the bbox diagonal", 0.002, 0.5)
+        .add("edge_length", &TetgenParams::edge_length, "target tet edge, fraction of the reference length (the tightest bounding-box diagonal over all orientations)", 0.002, 0.5)
         .add("radius_edge", &TetgenParams::radius_edge, "bound on circumradius / shortest edge (TetGen -q)", 1.1, 10.0)
         .add("min_dihedral", &TetgenParams::min_dihedral, "dihedral angle bound in degrees (TetGen -q ratio/angle)", 0.0,
              18.0)
