@@ -1,6 +1,7 @@
 #include "graph/config.h"
 
 #include <fstream>
+#include <functional>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -21,6 +22,7 @@ std::set<std::string> config_var_names(const json& j) {
   std::set<std::string> names;
   if (j.is_object() && j.contains("vars") && j["vars"].is_object())
     for (auto it = j["vars"].begin(); it != j["vars"].end(); ++it) names.insert(it.key());
+  if (j.is_object() && j.contains("branches")) names.insert("branch");  // each copy's number
   return names;
 }
 
@@ -88,6 +90,110 @@ json resolve_value(const json& j, const json& vars, const std::string& where) {
   return last == 0 ? j : json(out + s.substr(last));
 }
 
+// The config's vars with every product ("2 * ${hex_edge}") evaluated to its number. A product is a
+// string of numbers and `${var}` references joined by `*`; its vars must be numbers or products.
+json evaluate_vars(const json& vars, const std::string& source) {
+  static const std::regex term(R"(\s*(\$\{([A-Za-z_][A-Za-z0-9_]*)\}|[-+]?[0-9]*\.?[0-9]+([eE][-+]?[0-9]+)?)\s*)");
+  json out = vars;
+  std::map<std::string, int> state;  // 1 = being evaluated, 2 = done
+  std::function<json(const std::string&)> value = [&](const std::string& name) -> json {
+    const std::string where = source + ": vars." + name;
+    if (state[name] == 2) return out[name];
+    if (state[name] == 1) throw ConfigError(where + ": the vars refer to each other in a cycle");
+    const json& v = vars[name];
+    if (!v.is_string() || v.get<std::string>().find("${") == std::string::npos) {
+      state[name] = 2;
+      return v;
+    }
+    state[name] = 1;
+    const std::string s = v.get<std::string>();
+    double product = 1;
+    size_t pos = 0;
+    while (true) {
+      std::smatch m;
+      const std::string rest = s.substr(pos);
+      if (!std::regex_search(rest, m, term, std::regex_constants::match_continuous))
+        throw ConfigError(where + ": `" + s + "` is not a product of numbers and ${var}s (like \"2 * ${hex_edge}\")");
+      if (m[2].matched) {
+        if (!vars.contains(m[2].str())) throw ConfigError(where + ": `${" + m[2].str() + "}` is not a var of the config");
+        const json f = value(m[2].str());
+        if (!f.is_number()) throw ConfigError(where + ": `${" + m[2].str() + "}` is not a number (" + f.dump() + ")");
+        product *= f.get<double>();
+      } else {
+        product *= std::stod(m[1].str());
+      }
+      pos += size_t(m.length(0));
+      if (pos == s.size()) break;
+      if (s[pos] != '*') throw ConfigError(where + ": `" + s + "` is not a product of numbers and ${var}s (like \"2 * ${hex_edge}\")");
+      ++pos;
+    }
+    state[name] = 2;
+    return out[name] = product;
+  };
+  for (auto it = vars.begin(); it != vars.end(); ++it) value(it.key());
+  return out;
+}
+
+// The config's nodes with its `branches` block expanded: each listed node becomes `count` copies `id#1`
+// .. `id#count`, in place of the first listed node, whose inputs naming listed nodes name the copy of
+// the same branch. `branch_of` gets each output node's branch (0 outside).
+json expand_branches(const json& j, const std::string& source, std::vector<int>& branch_of) {
+  const json& nodes = j["nodes"];
+  branch_of.assign(nodes.size(), 0);
+  if (!j.contains("branches")) return nodes;
+  const std::string where = source + ": branches";
+  const json& b = j["branches"];
+  if (!b.is_object()) throw ConfigError(where + ": an object {\"count\": N, \"nodes\": [ids]}");
+  for (auto it = b.begin(); it != b.end(); ++it)
+    if (it.key() != "count" && it.key() != "nodes")
+      throw ConfigError(where + ": unknown key `" + it.key() + "`; valid keys: count, nodes");
+  if (!b.contains("count") || !b["count"].is_number_integer() || b["count"].get<int>() < 1 || b["count"].get<int>() > 8)
+    throw ConfigError(where + ".count: an integer in [1, 8]");
+  const int count = b["count"].get<int>();
+  if (!b.contains("nodes") || !b["nodes"].is_array() || b["nodes"].empty())
+    throw ConfigError(where + ".nodes: a non-empty array of node ids");
+  std::set<std::string> listed, ids;
+  for (const json& n : nodes)
+    if (n.is_object() && n.contains("id") && n["id"].is_string()) ids.insert(n["id"].get<std::string>());
+  for (const json& id : b["nodes"]) {
+    if (!id.is_string()) throw ConfigError(where + ".nodes: a non-empty array of node ids");
+    if (!ids.count(id.get<std::string>())) throw ConfigError(where + ".nodes: no node with id `" + id.get<std::string>() + "`");
+    if (!listed.insert(id.get<std::string>()).second) throw ConfigError(where + ".nodes: `" + id.get<std::string>() + "` listed twice");
+  }
+  auto is_listed = [&](const json& n) { return n.is_object() && n.contains("id") && n["id"].is_string() && listed.count(n["id"].get<std::string>()); };
+  json out = json::array();
+  std::vector<int> of;
+  bool placed = false;
+  for (const json& n : nodes) {
+    if (!is_listed(n)) {
+      if (n.is_object() && n.contains("inputs") && (n["inputs"].is_object() || n["inputs"].is_array()))
+        for (const json& from : n["inputs"])
+          if (from.is_string() && listed.count(from.get<std::string>()))
+            throw ConfigError(source + ": node `" + n.value("id", std::string("?")) + "`: input `" + from.get<std::string>() +
+                              "` is a branch node: name one copy, `" + from.get<std::string>() + "#1` to `" +
+                              from.get<std::string>() + "#" + std::to_string(count) + "`");
+      out.push_back(n);
+      of.push_back(0);
+      continue;
+    }
+    if (placed) continue;
+    placed = true;
+    for (int k = 1; k <= count; ++k)
+      for (const json& m : nodes) {
+        if (!is_listed(m)) continue;
+        json c = m;
+        c["id"] = m["id"].get<std::string>() + "#" + std::to_string(k);
+        if (c.contains("inputs") && (c["inputs"].is_object() || c["inputs"].is_array()))
+          for (json& from : c["inputs"])
+            if (from.is_string() && listed.count(from.get<std::string>())) from = from.get<std::string>() + "#" + std::to_string(k);
+        out.push_back(c);
+        of.push_back(k);
+      }
+  }
+  branch_of = of;
+  return out;
+}
+
 }  // namespace
 
 json substitute_vars(const json& j, const std::map<std::string, std::string>& vars, const std::string& source) {
@@ -100,10 +206,10 @@ PipelineConfig parse_config(const json& j, const std::string& source) {
   if (!j.is_object()) throw ConfigError(source + ": a config is a JSON object with a `nodes` array");
   for (auto it = j.begin(); it != j.end(); ++it)
     if (it.key() != "nodes" && it.key() != "description" && it.key() != "sweep" && it.key() != "retry" &&
-        it.key() != "vars")
+        it.key() != "vars" && it.key() != "branches")
       throw ConfigError(source + ": unknown top-level key `" + it.key() +
-                        "`; valid keys: nodes, vars, description, sweep, retry");
-  const json vars = j.contains("vars") ? j["vars"] : json::object();
+                        "`; valid keys: nodes, vars, branches, description, sweep, retry");
+  json vars = j.contains("vars") ? j["vars"] : json::object();
   if (!vars.is_object()) throw ConfigError(source + ": `vars` must be an object {\"name\": value}");
   static const std::regex var_name_re("[A-Za-z_][A-Za-z0-9_]*");
   for (auto it = vars.begin(); it != vars.end(); ++it) {
@@ -112,12 +218,18 @@ PipelineConfig parse_config(const json& j, const std::string& source) {
     if (!it.value().is_number() && !it.value().is_string() && !it.value().is_boolean())
       throw ConfigError(source + ": vars." + it.key() + ": a number, string or boolean, got " + it.value().dump());
   }
+  vars = evaluate_vars(vars, source);
   if (!j.contains("nodes") || !j["nodes"].is_array() || j["nodes"].empty())
     throw ConfigError(source + ": `nodes` must be a non-empty array");
+  if (j.contains("branches") && vars.contains("branch"))
+    throw ConfigError(source + ": vars: `branch` is reserved in a config with branches (`${branch}` is the copy's number)");
+  std::vector<int> branch_of;
+  const json nodes = expand_branches(j, source, branch_of);
   std::set<std::string> ids;
-  static const std::regex id_re("[A-Za-z0-9_-]+");
+  static const std::regex id_re("[A-Za-z0-9_-]+(#[0-9])?");
   size_t index = 0;
-  for (const json& n : j["nodes"]) {
+  for (const json& n : nodes) {
+    const int branch = branch_of[index];
     std::string where = source + ": nodes[" + std::to_string(index++) + "]";
     if (!n.is_object()) throw ConfigError(where + ": each node is an object {id, type, params, inputs}");
     for (auto it = n.begin(); it != n.end(); ++it)
@@ -127,14 +239,17 @@ PipelineConfig parse_config(const json& j, const std::string& source) {
     NodeConfig nc;
     nc.id = n["id"].get<std::string>();
     where = source + ": node `" + nc.id + "`";
-    if (!std::regex_match(nc.id, id_re)) throw ConfigError(where + ": an id uses only letters, digits, _ and -");
+    if (!std::regex_match(nc.id, id_re) || (branch == 0 && nc.id.find('#') != std::string::npos))
+      throw ConfigError(where + ": an id uses only letters, digits, _ and -");
     if (!ids.insert(nc.id).second) throw ConfigError(where + ": duplicate id");
     if (nc.id == "vars") throw ConfigError(where + ": `vars` is reserved (`--set vars.NAME=value` sets a config var)");
     if (!n.contains("type") || !n["type"].is_string()) throw ConfigError(where + ": missing string `type`");
     nc.type = n["type"].get<std::string>();
     if (n.contains("params")) {
       if (!n["params"].is_object()) throw ConfigError(where + ": `params` must be an object");
-      nc.params = resolve_value(n["params"], vars, where);
+      json scope = vars;
+      if (branch > 0) scope["branch"] = branch;
+      nc.params = resolve_value(n["params"], scope, where);
     }
     if (n.contains("inputs")) {
       const json& in = n["inputs"];
@@ -143,6 +258,7 @@ PipelineConfig parse_config(const json& j, const std::string& source) {
       if (!ok) throw ConfigError(where + ": `inputs` must map port names to node ids, or list node ids");
       nc.inputs = in;
     }
+    nc.branch = branch;
     cfg.nodes.push_back(std::move(nc));
   }
   return cfg;

@@ -7,7 +7,14 @@
 /// when the config is parsed, after every override: one value that several params follow (the tet size
 /// used by the surface conditioning and by TetGen). `--set vars.tet_edge=0.03`, a sweep axis
 /// `vars.tet_edge` and a retry variant's `"vars.tet_edge"` change it; `--set tets.edge_length=0.03`
-/// still sets that one param alone.
+/// still sets that one param alone. A var may be a product of numbers and other vars, `"tet_edge":
+/// "2 * ${hex_edge}"`: one value (`--hex-edge`, `--set vars.hex_edge=...`) then sets both sizes.
+///
+/// `"branches": {"count": N, "nodes": [ids]}` runs the listed nodes N times side by side: each becomes
+/// the copies `id#1` .. `id#N`, whose inputs naming listed nodes name the copy of the same branch, and
+/// in whose params `${branch}` is the copy's number. Nodes outside name one copy (`unframe#2`); `--set
+/// id.param`, sweeps and retry variants set the param of every copy. The orientation search uses it
+/// (one branch per candidate frame; docs/orientation.md).
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -29,6 +36,7 @@ struct NodeConfig {
   /// port name -> id of the producing node. A config may give `inputs` as an object
   /// {"port": "id"} or as an array of ids in port order (resolved against the node spec).
   json inputs = json::object();
+  int branch = 0;  ///< the copy's number for a node of the config's `branches` (id `name#branch`), else 0
 };
 
 struct PipelineConfig {
@@ -44,10 +52,12 @@ json substitute_vars(const json& j, const std::map<std::string, std::string>& va
 /// Checks the structure of a config (top-level object with a `nodes` array, each node an object with
 /// string `id` and `type`, optional object `params`, object-or-array `inputs`, no other keys, unique ids).
 /// The optional top-level `description`, `sweep` (tools/sweep.cpp) and `retry` (runtime/cli_run.h) are
-/// checked by their users. `vars` (name -> number, string or boolean) is substituted into the params:
-/// a param that is exactly `"${name}"` takes the var's value and type.
+/// checked by their users. `vars` (name -> number, string, boolean or a product like "2 * ${hex_edge}")
+/// is substituted into the params: a param that is exactly `"${name}"` takes the var's value and type.
+/// `branches` is expanded (see above).
 /// \throw ConfigError naming the source and the node (a reference to an undefined var lists the vars;
-///        the id `vars` is reserved).
+///        the id `vars` is reserved; a var product that does not parse or refers in a cycle; a branch
+///        node named by a node outside without its copy's number).
 PipelineConfig parse_config(const json& j, const std::string& source);
 
 /// Reads a JSON config file, then substitutes variables.

@@ -263,10 +263,19 @@ struct NodeSpec {
   std::function<std::vector<std::filesystem::path>(const json& params)> input_files;
   /// Code version of the node, part of its cache key: bump it when the algorithm's output changes.
   std::string version = "1";
+  /// The node may return no artefact (an empty Artefact): it has nothing to do in this run (a branch
+  /// without a candidate frame). Its dependants are then skipped: each node with a required input from
+  /// a skipped node is not run, produces nothing and is reported as skipped; an optional port from a
+  /// skipped node is left unconnected. Empty results are not cached.
+  bool may_skip = false;
   std::string stage() const { return type.substr(0, type.find('/')); }
   /// `register_node(make_node<P>(...).with_version("2"))`
   NodeSpec with_version(std::string v) && {
     version = std::move(v);
+    return std::move(*this);
+  }
+  NodeSpec with_may_skip() && {
+    may_skip = true;
     return std::move(*this);
   }
   NodeSpec with_input_files(std::function<std::vector<std::filesystem::path>(const json&)> f) && {

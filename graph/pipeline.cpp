@@ -214,6 +214,14 @@ RunResult Pipeline::run(const RunOptions& opt) const {
     ctx.on_progress = [&](double f, const std::string& what) { event("progress", n, f, what); };
     Inputs in;
     for (int u : n.input_nodes) in.items.push_back(u >= 0 ? outputs[u] : Artefact{});
+    // A required input from a node that produced nothing (a may_skip node's empty result, or a node
+    // skipped for that reason): this node is skipped too.
+    for (size_t k = 0; k < n.input_nodes.size(); ++k)
+      if (n.input_nodes[k] >= 0 && !in.items[k] && !n.spec->inputs[k].optional) {
+        rec.skipped = true;
+        event("skipped", n, 0, "");
+        return;
+      }
     auto t0 = std::chrono::steady_clock::now();
     // The key: each input by its content where known, else by its own key (graph/cache.h); none when an
     // input has neither (it cannot be cached) or a file the node reads cannot be read (keys[i] empty).
@@ -252,6 +260,14 @@ RunResult Pipeline::run(const RunOptions& opt) const {
     event("start", n, 0, "");
     try {
       Artefact out = n.spec->run(n.params, in, ctx);
+      if (!out && n.spec->may_skip) {
+        rec.skipped = true;
+        rec.metrics = std::move(ctx.metrics);
+        rec.warnings = std::move(ctx.warnings);
+        rec.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        event("done", n, rec.seconds, "");
+        return;
+      }
       if (!n.spec->output.empty() && (!out || out.type != n.spec->output))
         throw Error("produced " + (out ? out.type : std::string("nothing")) + " instead of " + n.spec->output);
       outputs[i] = out;
@@ -332,6 +348,7 @@ json RunResult::report() const {
     json j;
     j["type"] = n.type;
     j["ran"] = n.ran;
+    if (n.skipped) j["skipped"] = true;
     j["seconds"] = n.seconds;
     j["cache_hit"] = n.cache_hit;
     j["metrics"] = n.metrics;

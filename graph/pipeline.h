@@ -33,6 +33,7 @@ struct NodeRecord {
   double seconds = 0;
   bool cache_hit = false;        ///< the output, metrics and warnings were loaded from the artefact cache
   bool ran = false;              ///< the node completed (computed, or loaded from the cache)
+  bool skipped = false;          ///< not run: a required input came from a node that produced nothing (NodeSpec::may_skip)
   std::string cache_key;         ///< the key its output was looked up and stored under ("" when not cached)
   json metrics = json::object();
   std::vector<std::string> warnings;
@@ -48,7 +49,8 @@ struct RunOptions {
   /// with a warning on the node, recomputed and overwritten; a failed store is a warning too.
   std::filesystem::path cache_dir;
   /// Called on node start ("start"), end ("done"), cache hit ("cached", value = seconds to load; no
-  /// "start"/"done" then) and progress ("progress"); may be empty.
+  /// "start"/"done" then), skip ("skipped": a required input produced nothing) and progress ("progress");
+  /// may be empty.
   std::function<void(const std::string& event, const std::string& id, const std::string& type, double value,
                      const std::string& what)>
       on_event;
@@ -62,7 +64,8 @@ struct RunResult {
   json retry;                     ///< the config's retry attempts (runtime/cli_run.h); null when it has none
   /// "ok", "interrupted" or "error"
   std::string status() const { return error.empty() ? "ok" : interrupted ? "interrupted" : "error"; }
-  /// report.json: {polyhex_version, status, error?, seconds, nodes: {id: {type, seconds, cache_hit, metrics, warnings}}, retry?}
+  /// report.json: {polyhex_version, status, error?, seconds, nodes: {id: {type, ran, skipped?, seconds, cache_hit, metrics,
+  /// warnings}}, retry?}
   json report() const;
 };
 

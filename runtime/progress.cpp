@@ -17,7 +17,7 @@ std::string progress_bar_line(const std::string& id, double fraction, const std:
   const double f = std::isnan(fraction) ? 0.0 : std::clamp(fraction, 0.0, 1.0);
   const int filled = std::min(bar, int(std::floor(f * bar)));
   char pct[8];
-  std::snprintf(pct, sizeof pct, "%3d%%", std::min(100, int(std::floor(f * 100))));
+  std::snprintf(pct, sizeof pct, "%3d%%", std::clamp(int(std::floor(f * 100)), 0, 100));
   std::string line = "[" + id + "] " + std::string(size_t(filled), '#') + std::string(size_t(bar - filled), '-') + " " + pct;
   if (!what.empty()) line += " " + what;
   if (width >= 0 && line.size() > size_t(width)) line.resize(size_t(width));
@@ -60,6 +60,7 @@ void ProgressPrinter::event(const std::string& e, const std::string& id, const s
     std::fflush(out_);
   } else if (mode_ == ProgressMode::lines) {
     if (e == "start") std::fprintf(out_, "polyhex: %-16s %-34s started\n", id.c_str(), type.c_str());
+    if (e == "skipped") std::fprintf(out_, "polyhex: %-16s %-34s skipped (no input)\n", id.c_str(), type.c_str());
     if (e == "progress") std::fprintf(out_, "polyhex: %-16s %3.0f%% %s\n", id.c_str(), 100 * value, what.c_str());
   } else {
     // One column short of the width: a line that fills the terminal wraps on some terminals.

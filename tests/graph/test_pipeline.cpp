@@ -74,6 +74,17 @@ const bool registered = [] {
         ctx.warn("merged");
         return Artefact{};
       }));
+  struct Keep {
+    double below = 1;
+  };
+  register_node(make_node<Keep>(
+                    "test_keep/default", "passes a box on when its size is below `below`, else produces nothing",
+                    ParamSet<Keep>().add("below", &Keep::below, "size bound", 0.0, 10.0),
+                    {{"surface", artefact_name<SurfaceMesh>()}}, artefact_name<SurfaceMesh>(),
+                    [](const Keep& p, const Inputs& in, NodeContext&) {
+                      return in.get<SurfaceMesh>(0)->V.maxCoeff() < p.below ? in.items[0] : Artefact{};
+                    })
+                    .with_may_skip());
   register_node(make_node<Empty>(
       "test_fail/default", "always throws", ParamSet<Empty>(), {{"surface", artefact_name<SurfaceMesh>()}},
       artefact_name<TetMesh>(), [](const Empty&, const Inputs&, NodeContext&) -> Artefact {
@@ -181,6 +192,68 @@ TEST_CASE("config vars: one value that several params follow", "[graph]") {
   REQUIRE_THROWS_WITH(parse_config(bad, "x.json"), Contains("vars.a: a number, string or boolean"));
   bad = json::parse(R"({"nodes":[{"id":"vars","type":"test_source/box"}]})");
   REQUIRE_THROWS_WITH(parse_config(bad, "x.json"), Contains("`vars` is reserved"));
+}
+
+TEST_CASE("config vars: a product of vars is one number that follows them", "[graph]") {
+  json j = json::parse(R"({"vars":{"h":0.5,"t":"2 * ${h}","u":"${t}*1.5"},
+      "nodes":[{"id":"s","type":"test_source/box","params":{"size":"${t}"}},
+               {"id":"r","type":"test_source/box","params":{"size":"${u}"}}]})");
+  PipelineConfig c = parse_config(j, "x.json");
+  CHECK(c.nodes[0].params["size"] == 1.0);
+  CHECK(c.nodes[1].params["size"] == 1.5);
+  apply_override(j, "vars.h=2");
+  c = parse_config(j, "x.json");
+  CHECK(c.nodes[0].params["size"] == 4.0);
+  CHECK(c.nodes[1].params["size"] == 6.0);
+  json bad = json::parse(R"({"vars":{"a":"2 * ${b}","b":"${a}"},"nodes":[{"id":"s","type":"test_source/box"}]})");
+  REQUIRE_THROWS_WITH(parse_config(bad, "x.json"), Contains("cycle"));
+  bad = json::parse(R"({"vars":{"a":"2 + ${b}","b":1},"nodes":[{"id":"s","type":"test_source/box"}]})");
+  REQUIRE_THROWS_WITH(parse_config(bad, "x.json"), Contains("not a product"));
+}
+
+TEST_CASE("config branches: copies side by side, ${branch}, skipped copies", "[graph]") {
+  const std::string text = R"({"branches":{"count":3,"nodes":["keep","scaled"]},
+      "nodes":[{"id":"src","type":"test_source/box","params":{"size":2}},
+               {"id":"keep","type":"test_keep","params":{"below":"${branch}"},"inputs":{"surface":"src"}},
+               {"id":"scaled","type":"test_scale","inputs":{"surface":"keep"}},
+               {"id":"sum","type":"test_merge","inputs":{"a":"scaled#3","b":"scaled#1"}}]})";
+  json j = json::parse(text);
+  PipelineConfig c = parse_config(j, "x.json");
+  REQUIRE(c.nodes.size() == 8);
+  CHECK(c.nodes[1].id == "keep#1");
+  CHECK(c.nodes[2].id == "scaled#1");
+  CHECK(c.nodes[2].inputs["surface"] == "keep#1");
+  CHECK(c.nodes[5].id == "keep#3");
+  CHECK(c.nodes[5].params["below"] == 3);
+  CHECK(c.nodes[5].branch == 3);
+  CHECK(c.nodes[7].branch == 0);
+  apply_override(j, "keep.below=9");  // every copy
+  c = parse_config(j, "x.json");
+  CHECK(c.nodes[1].params["below"] == 9);
+  CHECK(c.nodes[5].params["below"] == 9);
+  // Run: the box's coordinates reach 2, so keep#1 (below 1) and keep#2 (below 2) produce nothing and
+  // their scaled copies are skipped; sum's optional port from scaled#1 is left unconnected.
+  Pipeline p = build(text);
+  RunOptions opt;
+  opt.out_dir = temp_dir("branches");
+  g_max_running = 2;  // test_scale waits for a sibling otherwise
+  RunResult r = p.run(opt);
+  REQUIRE(r.error.empty());
+  const json rep = r.report();
+  CHECK(rep["nodes"]["keep#1"]["skipped"] == true);
+  CHECK(rep["nodes"]["scaled#1"]["skipped"] == true);
+  CHECK(rep["nodes"]["scaled#2"]["skipped"] == true);
+  CHECK_FALSE(rep["nodes"]["scaled#3"].contains("skipped"));
+  CHECK(rep["nodes"]["sum"]["metrics"]["vertices"] == 4);
+  json bad = json::parse(R"({"branches":{"count":2,"nodes":["keep"]},
+      "nodes":[{"id":"src","type":"test_source/box"},
+               {"id":"keep","type":"test_keep","inputs":{"surface":"src"}},
+               {"id":"sum","type":"test_merge","inputs":{"a":"keep"}}]})");
+  REQUIRE_THROWS_WITH(parse_config(bad, "x.json"), Contains("name one copy, `keep#1` to `keep#2`"));
+  bad["branches"]["nodes"] = json::array({"nothing"});
+  REQUIRE_THROWS_WITH(parse_config(bad, "x.json"), Contains("no node with id `nothing`"));
+  bad = json::parse(R"({"nodes":[{"id":"a#1","type":"test_source/box"}]})");
+  REQUIRE_THROWS_WITH(parse_config(bad, "x.json"), Contains("an id uses only letters"));
 }
 
 TEST_CASE("a pipeline runs, independent nodes concurrently, and writes report.json", "[graph]") {
