@@ -110,6 +110,14 @@ Pipeline load_pipeline(const RunRequest& req, std::optional<RetryPlan>* retry) {
   std::map<std::string, std::string> vars;
   if (!req.input.empty()) vars["input"] = req.input;
   json j = load_config_json(req.config, vars);
+  if (req.hex_edge > 0) {
+    try {
+      set_param(j, "vars", "hex_edge", req.hex_edge);
+    } catch (const ConfigError& e) {
+      throw ConfigError("--hex-edge: " + req.config.string() + ": " + e.what() +
+                        " (add \"vars\": {\"hex_edge\": ...} and make the sizes follow it)");
+    }
+  }
   for (const std::string& s : req.sets) apply_override(j, s);
   Pipeline p = Pipeline::build(parse_config(j, req.config.string()));
   if (retry) *retry = retry_plan(j, p, req.config.string());

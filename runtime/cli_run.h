@@ -37,6 +37,9 @@ struct RunRequest {
   std::filesystem::path config;
   std::string input;                 ///< value of ${input}; empty = the config's default
   std::vector<std::string> sets;     ///< id.param=value overrides
+  /// --hex-edge: the config var `hex_edge` (the hex edge as a fraction of the reference length, which
+  /// the default configs' other sizes follow), set before `sets`; 0 = the config's own
+  double hex_edge = 0;
   std::filesystem::path out_dir = "polyhex-out";
   int threads = 0;
   bool save_all = false;

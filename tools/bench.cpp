@@ -248,6 +248,8 @@ const bool registered = register_commands([](CLI::App& app, std::vector<Command>
       "bench", "stage throughput: warm-up, then N runs without cache; per node min/median/max seconds and throughput");
   bench->add_option("config", o->req.config, "pipeline config (JSON)")->required();
   bench->add_option("--input,-i", o->req.input, "value of ${input} in the config (a surface or tet mesh file)");
+  bench->add_option("--hex-edge", o->req.hex_edge, "hex edge, fraction of the reference length (the config var hex_edge)")
+      ->check(CLI::Range(1e-4, 0.5));
   bench->add_option("--set,-s", o->req.sets, "override a param: id.param=value (repeatable)");
   bench->add_option("--threads,-j", o->req.threads, "worker threads (default: all cores)");
   bench->add_option("--out,-o", o->req.out_dir, "output folder of the runs (default polyhex-bench)");

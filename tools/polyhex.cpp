@@ -1,6 +1,6 @@
 // polyhex: command-line interface of the all-hex PolyCube mesher.
 //
-//   polyhex run CONFIG [--input FILE] [--out DIR] [--set id.param=value]... [--threads N] [--save-all]
+//   polyhex run CONFIG [--input FILE] [--hex-edge H] [--out DIR] [--set id.param=value]... [--threads N] [--save-all]
 //               [--cache DIR | --no-cache] [--html] [-v]
 //   polyhex report RUN_DIR [--max-quads N] [--min-sj X]   (RUN_DIR/report.html, tools/report_command.cpp)
 //   polyhex bench CONFIG [--input FILE] [--repeat N] [--json FILE] [--set ...] [--threads N]
@@ -36,6 +36,10 @@ namespace {
 void add_run_options(CLI::App* c, RunRequest& req) {
   c->add_option("config", req.config, "pipeline config (JSON)")->required();
   c->add_option("--input,-i", req.input, "value of ${input} in the config (a surface or tet mesh file)");
+  c->add_option("--hex-edge", req.hex_edge,
+                "hex edge as a fraction of the shape's reference length (its tightest bounding-box diagonal); the "
+                "default configs derive every other size from it (sets the config var hex_edge)")
+      ->check(CLI::Range(1e-4, 0.5));
   c->add_option("--set,-s", req.sets, "override a param: id.param=value (repeatable)");
   c->add_option("--threads,-j", req.threads, "worker threads (default: all cores)");
 }

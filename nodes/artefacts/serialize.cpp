@@ -308,6 +308,7 @@ const bool registered_codecs = [] {
   add_codec<HexMesh>(&write_binary, &read_hexmesh_binary);
   add_codec<PolyCubeSegmentation>(&write_binary, &read_segmentation_binary);
   add_codec<PolyCubeMap>(&write_binary, &read_polycube_map_binary);
+  add_codec<Frames>(&write_binary, &read_frames_binary);
   return true;
 }();
 
@@ -348,6 +349,33 @@ PolyCubeSegmentation read_segmentation_binary(std::istream& in) {
 }
 PolyCubeMap read_polycube_map_binary(std::istream& in) {
   return read_all(in, "PolyCubeMap", read_map);
+}
+// Frames: u64 count, then per candidate R (9 doubles, row-major), energy, source, i32 branch.
+void write_binary(std::ostream& out, const Frames& f) {
+  Writer w(out);
+  w.count(f.candidates.size());
+  for (const FrameCandidate& c : f.candidates) {
+    for (int r = 0; r < 3; ++r)
+      for (int k = 0; k < 3; ++k) w.pod(c.R(r, k));
+    w.pod(c.energy);
+    w.str(c.source);
+    w.pod(std::int32_t(c.branch));
+  }
+}
+Frames read_frames_binary(std::istream& in) {
+  return read_all(in, "Frames", [](Reader& r) {
+    Frames f;
+    f.candidates.resize(r.count(9 * 8 + 8 + 8 + 4));
+    for (FrameCandidate& c : f.candidates) {
+      for (int i = 0; i < 3; ++i)
+        for (int k = 0; k < 3; ++k) c.R(i, k) = r.pod<double>();
+      c.energy = r.pod<double>();
+      c.source = r.str();
+      c.branch = r.pod<std::int32_t>();
+      if (c.branch < 0) r.fail("negative branch");
+    }
+    return f;
+  });
 }
 
 }  // namespace polyhex

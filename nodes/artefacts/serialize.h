@@ -1,6 +1,6 @@
 /// @file serialize.h
 /// @brief Binary codecs of the artefact types (SurfaceMesh, TetMesh, HexMesh, PolyCubeSegmentation,
-/// PolyCubeMap) for the artefact cache (graph/cache.h).
+/// PolyCubeMap, Frames) for the artefact cache (graph/cache.h).
 ///
 /// The payload is little-endian raw data, no padding: strings and arrays are a u64 count followed by
 /// the elements; matrices are u64 rows followed by rows x cols elements in row-major order (doubles as
@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <iosfwd>
 
+#include "nodes/artefacts/frames.h"
 #include "nodes/artefacts/meshes.h"
 #include "nodes/artefacts/polycube.h"
 #include "nodes/artefacts/polycube_map.h"
@@ -22,7 +23,7 @@
 namespace polyhex {
 
 /// Format version of every payload below (ArtefactCodec::version).
-constexpr std::uint32_t kCodecVersion = 5;
+constexpr std::uint32_t kCodecVersion = 6;
 
 /// Writes the payload of one artefact. \throw IOError when the stream fails
 void write_binary(std::ostream& out, const SurfaceMesh& m);
@@ -30,6 +31,7 @@ void write_binary(std::ostream& out, const TetMesh& m);
 void write_binary(std::ostream& out, const HexMesh& m);
 void write_binary(std::ostream& out, const PolyCubeSegmentation& s);
 void write_binary(std::ostream& out, const PolyCubeMap& m);
+void write_binary(std::ostream& out, const Frames& f);
 
 /// Reads a payload written by write_binary of the same type.
 /// \pre the stream holds exactly one payload of that type (trailing bytes are an error)
@@ -40,5 +42,6 @@ TetMesh read_tetmesh_binary(std::istream& in);
 HexMesh read_hexmesh_binary(std::istream& in);
 PolyCubeSegmentation read_segmentation_binary(std::istream& in);
 PolyCubeMap read_polycube_map_binary(std::istream& in);
+Frames read_frames_binary(std::istream& in);
 
 }  // namespace polyhex

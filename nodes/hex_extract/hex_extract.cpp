@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -266,6 +267,7 @@ class Extractor {
   /// Every tet visits the lattice points (offset by `shift`) of its bounding box.
   std::vector<Candidate> rasterise(double shift) const {
     tbb::enumerable_thread_specific<std::vector<Candidate>> local;
+    std::atomic<long> exploded{0};
     const Vec3 off = Vec3::Constant(shift) + delta_;
     tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, T_.rows(), 2048), [&](const auto& r) {
       throw_if_interrupted();
@@ -276,6 +278,11 @@ class Extractor {
         if (std::abs(vol) < 1e-14) continue;
         const Vec3 lo = p[0].cwiseMin(p[1]).cwiseMin(p[2]).cwiseMin(p[3]) - off;
         const Vec3 hi = p[0].cwiseMax(p[1]).cwiseMax(p[2]).cwiseMax(p[3]) - off;
+        const Vec3 span = (hi - lo).array().floor() + 1;
+        if (!(span.prod() <= kMaxLatticePointsPerTet)) {
+          ++exploded;
+          continue;
+        }
         for (long i = long(std::ceil(lo.x())); i <= long(std::floor(hi.x())); ++i)
           for (long j = long(std::ceil(lo.y())); j <= long(std::floor(hi.y())); ++j)
             for (long k = long(std::ceil(lo.z())); k <= long(std::floor(hi.z())); ++k) {
@@ -300,6 +307,7 @@ class Extractor {
     });
     std::vector<Candidate> all;
     for (auto& v : local) all.insert(all.end(), v.begin(), v.end());
+    st_.exploded_tets = std::max(st_.exploded_tets, exploded.load());
     return all;
   }
 

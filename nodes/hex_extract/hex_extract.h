@@ -36,6 +36,11 @@
 
 namespace polyhex {
 
+/// A tet of a sound map spans a few hex edges (a box of at most a few hundred lattice points); one whose
+/// box holds more comes from a map that exploded there (distortion 1e11 was seen on a badly turned
+/// part) and would take hours to rasterise: it is skipped and counted (HexExtractStats::exploded_tets).
+constexpr double kMaxLatticePointsPerTet = 1e5;
+
 struct HexExtractParams {
   double duplicate_distance = 5.0;  ///< in hex edges: same lattice point and mapped this close = duplicate (§6: five), [0.5, 100]
   double search_margin = 0.5;       ///< lattice units: the hex search visits tets meeting its unit cube grown by this, [1e-3, 2]
@@ -48,6 +53,7 @@ struct HexExtractStats {
   long corner_vertices = 0, edge_vertices = 0, facet_vertices = 0, volume_vertices = 0;  ///< kept, per kind
   long dropped_conflict = 0;        ///< candidates outside the PolyCube structure (degree <= 0, wrong side of a facet)
   long dropped_duplicate = 0;       ///< candidates whose lattice point was taken by a vertex within duplicate_distance
+  long exploded_tets = 0;           ///< tets of the map whose lattice box holds more than kMaxLatticePointsPerTet points: not rasterised
   long unused_vertices = 0;         ///< kept vertices no hex uses (removed from the output)
   long centroids = 0;               ///< hex centroids generated
   long unlocated = 0;               ///< hex corners not found by the search (their hex is left out)

@@ -31,6 +31,7 @@ const bool registered = register_node(make_node<P>(
       j["volume_vertices"] = s.volume_vertices;
       j["dropped_conflict"] = s.dropped_conflict;
       j["dropped_duplicate"] = s.dropped_duplicate;
+      j["exploded_tets"] = s.exploded_tets;
       j["unused_vertices"] = s.unused_vertices;
       j["centroids"] = s.centroids;
       j["unlocated"] = s.unlocated;
@@ -38,6 +39,9 @@ const bool registered = register_node(make_node<P>(
       j["duplicate_hexes"] = s.duplicate_hexes;
       j["inverted"] = s.inverted;
       j["seconds"] = s.seconds;
+      if (s.exploded_tets > 0)
+        ctx.warn(std::to_string(s.exploded_tets) + " tets of the map span more than " +
+                 std::to_string(long(kMaxLatticePointsPerTet)) + " lattice points (the map exploded there): not rasterised");
       if (s.hexes_skipped > 0)
         ctx.warn(std::to_string(s.hexes_skipped) + " hex centroids gave no complete hex (" + std::to_string(s.unlocated) +
                  " corners not found): the mesh has holes there");

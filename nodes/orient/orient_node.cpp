@@ -1,0 +1,127 @@
+/// @file orient_node.cpp
+/// @brief Bindings of `orient/search` (candidate frames scored by axis alignment, nodes/orient/orient.h)
+/// and `orient/input` (the input frame alone), and of the frame nodes that carry meshes into a
+/// candidate's frame and back: `frame_tets`, `frame_surface`, `unframe_hexes`.
+#include <Eigen/Geometry>
+
+#include <cmath>
+
+#include "graph/node.h"
+#include "nodes/orient/orient.h"
+
+namespace polyhex {
+namespace {
+
+json frames_json(const Frames& f) {
+  json all = json::array();
+  for (const FrameCandidate& c : f.candidates) {
+    const Eigen::AngleAxisd aa(c.R);
+    all.push_back({{"source", c.source},
+                   {"energy", c.energy},
+                   {"branch", c.branch},
+                   {"turn_degrees", aa.angle() * 180 / M_PI},
+                   {"rotation", {{c.R(0, 0), c.R(0, 1), c.R(0, 2)}, {c.R(1, 0), c.R(1, 1), c.R(1, 2)}, {c.R(2, 0), c.R(2, 1), c.R(2, 2)}}}});
+  }
+  return all;
+}
+
+const bool registered_search = register_node(make_node<OrientParams>(
+    "orient/search",
+    "candidate frames for the PolyCube, scored by the axis alignment of the surface normals: the input frame, "
+    "and local minima of the alignment energy from the principal axes, dominant normals and a spread of rotations",
+    ParamSet<OrientParams>()
+        .add("max_frames", &OrientParams::max_frames, "frames run as branches at most, the input frame included", 1, 8)
+        .add("within", &OrientParams::within,
+             "besides the lowest-energy frame, frames with energy up to (1 + within) x its energy run too", 0, 10)
+        .add("distinct_degrees", &OrientParams::distinct_degrees,
+             "candidates closer than this many degrees (up to the cube's symmetries) are one", 1e-3, 45)
+        .add("histogram", &OrientParams::histogram, "normal bins per cube-map face side", 2, 256)
+        .add("spread_starts", &OrientParams::spread_starts, "descents from rotations spread over SO(3)", 0, 1000),
+    {{"surface", artefact_name<SurfaceMesh>()}}, artefact_name<Frames>(),
+    [](const OrientParams& p, const Inputs& in, NodeContext& ctx) {
+      OrientStats st;
+      Frames f = orient_frames(*in.get<SurfaceMesh>(0), p, &st);
+      ctx.metrics["candidates"] = frames_json(f);
+      ctx.metrics["starts"] = st.starts;
+      ctx.metrics["bins"] = st.bins;
+      ctx.metrics["input_energy"] = st.input_energy;
+      ctx.metrics["best_energy"] = st.best_energy;
+      ctx.metrics["branches"] = st.branches;
+      return make_artefact(std::move(f));
+    }));
+
+struct InputFrameParams {};
+
+const bool registered_input = register_node(make_node<InputFrameParams>(
+    "orient/input", "the input frame alone (no search): one branch, the mesh as it would be without orientation",
+    ParamSet<InputFrameParams>(), {{"surface", artefact_name<SurfaceMesh>()}}, artefact_name<Frames>(),
+    [](const InputFrameParams&, const Inputs& in, NodeContext& ctx) {
+      Frames f = input_frame_only(*in.get<SurfaceMesh>(0));
+      ctx.metrics["candidates"] = frames_json(f);
+      ctx.metrics["branches"] = 1;
+      return make_artefact(std::move(f));
+    }));
+
+struct FrameParams {
+  int branch = 1;  ///< the branch whose frame this is (configs: "${branch}")
+};
+
+ParamSet<FrameParams> frame_params() {
+  return ParamSet<FrameParams>().add("branch", &FrameParams::branch,
+                                     "the branch whose frame is used (configs: \"${branch}\"); none: nothing is produced "
+                                     "and the branch is skipped",
+                                     1, 8);
+}
+
+/// The candidate that runs as branch k, or null.
+const FrameCandidate* candidate_of(const Frames& f, int k) {
+  for (const FrameCandidate& c : f.candidates)
+    if (c.branch == k) return &c;
+  return nullptr;
+}
+
+/// V with every row x replaced by R x.
+RowMatrixX3d rotate_rows(const RowMatrixX3d& V, const Eigen::Matrix3d& R) { return V * R.transpose(); }
+
+template <class Mesh>
+Artefact into_frame(const FrameParams& p, const Inputs& in, NodeContext& ctx) {
+  const FrameCandidate* c = candidate_of(*in.get<Frames>(1), p.branch);
+  if (!c) {
+    ctx.metrics["frame"] = nullptr;
+    return Artefact{};
+  }
+  ctx.metrics["frame"] = c->source;
+  ctx.metrics["energy"] = c->energy;
+  if (c->R == Eigen::Matrix3d::Identity()) return in.items[0];  // the input frame: the input itself
+  Mesh m = *in.get<Mesh>(0);
+  m.V = rotate_rows(m.V, c->R);
+  return make_artefact(std::move(m));
+}
+
+const bool registered_frame_tets = register_node(
+    make_node<FrameParams>("frame_tets", "the tet mesh turned into the frame of one branch's candidate (x -> R x)",
+                           frame_params(), {{"tets", artefact_name<TetMesh>()}, {"frames", artefact_name<Frames>()}},
+                           artefact_name<TetMesh>(), into_frame<TetMesh>)
+        .with_may_skip());
+
+const bool registered_frame_surface = register_node(
+    make_node<FrameParams>("frame_surface", "the surface turned into the frame of one branch's candidate (x -> R x)",
+                           frame_params(),
+                           {{"surface", artefact_name<SurfaceMesh>()}, {"frames", artefact_name<Frames>()}},
+                           artefact_name<SurfaceMesh>(), into_frame<SurfaceMesh>)
+        .with_may_skip());
+
+const bool registered_unframe = register_node(make_node<FrameParams>(
+    "unframe_hexes", "a hex mesh built in one branch's frame turned back into the input's frame (x -> Rᵀ x)",
+    frame_params(), {{"hexes", artefact_name<HexMesh>()}, {"frames", artefact_name<Frames>()}},
+    artefact_name<HexMesh>(), [](const FrameParams& p, const Inputs& in, NodeContext& ctx) {
+      const FrameCandidate* c = candidate_of(*in.get<Frames>(1), p.branch);
+      if (!c) throw InvalidInput("no candidate frame runs as branch " + std::to_string(p.branch));
+      if (c->R == Eigen::Matrix3d::Identity()) return in.items[0];
+      HexMesh m = *in.get<HexMesh>(0);
+      m.V = rotate_rows(m.V, c->R.transpose());
+      return make_artefact(std::move(m));
+    }));
+
+}  // namespace
+}  // namespace polyhex

@@ -1,0 +1,88 @@
+// The orientation search (nodes/orient): the frame it finds for turned copies of generated shapes.
+#include <catch2/catch.hpp>
+
+#include "nodes/algorithms/rotations.h"
+#include "nodes/orient/orient.h"
+#include "nodes/shapes/shapes.h"
+#include "runtime/errors.h"
+#include "tests/helpers/rotations.h"
+
+using namespace polyhex;
+
+namespace {
+
+/// The lowest-energy candidate other than the input frame.
+const FrameCandidate& best_other(const Frames& f) {
+  REQUIRE(f.candidates.size() >= 2);
+  return f.candidates[1];
+}
+
+}  // namespace
+
+TEST_CASE("orient: a turned box gets the box's own frame back, to within a degree", "[orient]") {
+  const SurfaceMesh box = make_shape({"box", 16});
+  CHECK(alignment_energy(box, Eigen::Matrix3d::Identity()) == Approx(0).margin(1e-12));
+  for (unsigned seed : {11u, 12u, 13u, 14u, 15u}) {
+    const Eigen::Matrix3d R = test::seeded_rotation(seed);
+    const SurfaceMesh turned = test::rotated(box, R);
+    const Frames f = orient_frames(turned, OrientParams{});
+    REQUIRE(f.candidates[0].source == "input");
+    CHECK(f.candidates[0].R == Eigen::Matrix3d::Identity());
+    const FrameCandidate& c = best_other(f);
+    INFO("seed " << seed << ": input energy " << f.candidates[0].energy << ", best " << c.energy << " from " << c.source);
+    CHECK(c.branch == 1);
+    CHECK(f.candidates[0].branch == 0);  // the turned input frame is far worse: not run
+    // x_frame = C x_turned = C R x_box: C R is one of the cube's rotations when C is the box's frame.
+    CHECK(frame_distance_degrees(c.R, R.transpose()) < 1.0);
+    CHECK(c.energy < 1e-8);
+  }
+}
+
+TEST_CASE("orient: an axis-aligned part runs in its input frame alone", "[orient]") {
+  for (const char* name : {"box", "l_block", "fandisk_like"}) {
+    const Frames f = orient_frames(make_shape({name, 32}), OrientParams{});
+    int running = 0;
+    for (const FrameCandidate& c : f.candidates) running += c.branch > 0;
+    INFO(name << ": input energy " << f.candidates[0].energy);
+    CHECK(running == 1);
+    CHECK(f.candidates[0].branch == 1);
+  }
+}
+
+TEST_CASE("orient: a turned copy's best frame is as good as the original's", "[orient]") {
+  for (const char* name : {"fandisk_like", "l_block", "rod_with_holes"}) {
+    const SurfaceMesh s = make_shape({name, 32});
+    const Frames original = orient_frames(s, OrientParams{});
+    double e0 = original.candidates[0].energy;
+    for (const FrameCandidate& c : original.candidates) e0 = std::min(e0, c.energy);
+    for (unsigned seed : {21u, 22u, 23u}) {
+      const Frames f = orient_frames(test::rotated(s, test::seeded_rotation(seed)), OrientParams{});
+      INFO(name << " seed " << seed << ": original best " << e0 << ", turned input " << f.candidates[0].energy);
+      CHECK(best_other(f).energy <= e0 + 1e-6);
+      CHECK(best_other(f).branch == 1);
+    }
+  }
+}
+
+TEST_CASE("orient: limits of the search", "[orient]") {
+  const SurfaceMesh s = test::rotated(make_shape({"l_block", 16}), test::seeded_rotation(5));
+  OrientParams p;
+  p.max_frames = 1;
+  const Frames one = orient_frames(s, p);
+  int running = 0;
+  for (const FrameCandidate& c : one.candidates) running += c.branch > 0;
+  CHECK(running == 1);
+  CHECK(one.candidates[1].branch == 1);
+  p.max_frames = 0;
+  CHECK_THROWS_AS(orient_frames(s, p), ConfigError);
+  SurfaceMesh flat;
+  flat.V = RowMatrixX3d::Zero(3, 3);
+  flat.F.resize(1, 3);
+  flat.F << 0, 1, 2;
+  CHECK_THROWS_AS(orient_frames(flat, OrientParams{}), InvalidInput);
+  // Candidates other than the input are distinct up to the cube's symmetries.
+  const Frames f = orient_frames(s, OrientParams{});
+  for (size_t a = 1; a < f.candidates.size(); ++a)
+    for (size_t b = a + 1; b < f.candidates.size(); ++b)
+      CHECK(frame_distance_degrees(f.candidates[a].R, f.candidates[b].R) >= OrientParams{}.distinct_degrees);
+}
