@@ -39,6 +39,15 @@ void Registry::add_saver(const std::string& artefact_type, const std::string& ex
   savers_[artefact_type] = {ext, std::move(saver)};
 }
 
+void Registry::add_turner(const std::string& artefact_type, ArtefactTurner turner) {
+  turners_[artefact_type] = std::move(turner);
+}
+
+const ArtefactTurner* Registry::turner(const std::string& artefact_type) const {
+  auto it = turners_.find(artefact_type);
+  return it == turners_.end() ? nullptr : &it->second;
+}
+
 std::pair<std::string, ArtefactSaver> Registry::saver(const std::string& artefact_type) const {
   auto it = savers_.find(artefact_type);
   if (it == savers_.end()) return {"", nullptr};

@@ -106,6 +106,9 @@ struct NodeContext {
   json metrics = json::object();        ///< node-specific figures, copied into report.json
   std::vector<std::string> warnings;    ///< repairs and fallbacks, copied into report.json
   ProgressFn on_progress;               ///< may be empty
+  /// Set by a node whose output is in another frame than its inputs (NodeSpec::frame_role enters):
+  /// x -> frame x. --save-all turns the outputs of it and of everything downstream of it back.
+  std::optional<Eigen::Matrix3d> frame;
 
   void warn(const std::string& w) { warnings.push_back(w); }
   /// Reports progress and is a cancellation point: \throw Interrupted after SIGINT/SIGTERM.
@@ -268,10 +271,18 @@ struct NodeSpec {
   /// a skipped node is not run, produces nothing and is reported as skipped; an optional port from a
   /// skipped node is left unconnected. Empty results are not cached.
   bool may_skip = false;
+  /// How the node's output relates to the input's frame (the orientation search, nodes/orient):
+  /// `keeps` the frame of its inputs, `enters` a candidate's frame (it sets NodeContext::frame), `leaves`
+  /// it (its output is in the input's frame again). --save-all writes every artefact in the input's frame.
+  enum class FrameRole { keeps, enters, leaves } frame_role = FrameRole::keeps;
   std::string stage() const { return type.substr(0, type.find('/')); }
   /// `register_node(make_node<P>(...).with_version("2"))`
   NodeSpec with_version(std::string v) && {
     version = std::move(v);
+    return std::move(*this);
+  }
+  NodeSpec with_frame_role(FrameRole r) && {
+    frame_role = r;
     return std::move(*this);
   }
   NodeSpec with_may_skip() && {
@@ -302,6 +313,10 @@ NodeSpec make_node(std::string type, std::string doc, ParamSet<P> params, std::v
 /// Writes an artefact to a file (used by --save-all). \throw IOError
 using ArtefactSaver = std::function<void(const Artefact&, const std::filesystem::path&)>;
 
+/// An artefact with every position x replaced by R x (a rotation), for --save-all of artefacts built in
+/// another frame. \pre R is a rotation
+using ArtefactTurner = std::function<Artefact(const Artefact&, const Eigen::Matrix3d& R)>;
+
 /// Binary serialisation of one artefact type, for the artefact cache. `version` is the format
 /// version of the payload: bump it when the layout changes (older cache entries are then ignored).
 struct ArtefactCodec {
@@ -325,6 +340,10 @@ class Registry {
   /// \return {ext, saver} or nullptr saver when none is registered
   std::pair<std::string, ArtefactSaver> saver(const std::string& artefact_type) const;
   void set_default_variant(const std::string& stage, const std::string& variant);
+  /// Turners by artefact type (for --save-all in branches of the orientation search).
+  void add_turner(const std::string& artefact_type, ArtefactTurner turner);
+  /// \return the turner, or null when none is registered
+  const ArtefactTurner* turner(const std::string& artefact_type) const;
   /// Cache codecs by artefact type. \throw Error when the type has one already
   void add_codec(const std::string& artefact_type, ArtefactCodec codec);
   /// \return the codec, or null when the type cannot be cached
@@ -335,6 +354,7 @@ class Registry {
   std::map<std::string, std::string> default_variant_;
   std::map<std::string, std::pair<std::string, ArtefactSaver>> savers_;
   std::map<std::string, ArtefactCodec> codecs_;
+  std::map<std::string, ArtefactTurner> turners_;
 };
 
 inline bool register_node(NodeSpec spec) {

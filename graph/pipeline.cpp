@@ -196,6 +196,9 @@ RunResult Pipeline::run(const RunOptions& opt) const {
   }
   std::vector<Artefact> outputs(nodes_.size());
   std::vector<std::string> identity(nodes_.size());  // per node what its dependants' keys name it by
+  // Per computed node the rotation input -> the frame its output is in (NodeSpec::frame_role); none =
+  // the input's frame. Only --save-all uses it (it computes every node, so no cache hit hides one).
+  std::vector<std::optional<Eigen::Matrix3d>> frame(nodes_.size());
   std::mutex event_mutex;
   auto event = [&](const std::string& e, const ResolvedNode& n, double v, const std::string& what) {
     if (!opt.on_event) return;
@@ -271,9 +274,20 @@ RunResult Pipeline::run(const RunOptions& opt) const {
       if (!n.spec->output.empty() && (!out || out.type != n.spec->output))
         throw Error("produced " + (out ? out.type : std::string("nothing")) + " instead of " + n.spec->output);
       outputs[i] = out;
+      using Role = NodeSpec::FrameRole;
+      if (n.spec->frame_role == Role::enters) frame[i] = ctx.frame;
+      if (n.spec->frame_role == Role::keeps)
+        for (int u : n.input_nodes)
+          if (u >= 0 && frame[size_t(u)] && !frame[i]) frame[i] = frame[size_t(u)];
       if (opt.save_all && out) {
         auto [ext, saver] = Registry::instance().saver(out.type);
-        if (saver) saver(out, save_all_path(nodes_, n.id, ext, opt.out_dir));
+        Artefact shown = out;
+        if (frame[i] && *frame[i] != Eigen::Matrix3d::Identity()) {  // written in the input's frame
+          const ArtefactTurner* turn = Registry::instance().turner(out.type);
+          if (!turn) throw Error("--save-all: no way to turn a " + out.type + " back into the input's frame");
+          shown = (*turn)(out, frame[i]->transpose());
+        }
+        if (saver) saver(shown, save_all_path(nodes_, n.id, ext, opt.out_dir));
       }
     } catch (const NodeError&) {
       throw;

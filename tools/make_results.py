@@ -2,12 +2,15 @@
 """Meshes every model of ../shared/data/surfaces with a polyhex config (girl.off self-intersects: the
 surface conditioning repairs it) and writes docs/RESULTS.md: per model the hex quality, the PolyCube stages' figures and the time
 per stage, beside the 2011 paper's Table 1 and the best published PolyCube meshes (figures from
-../shared/data/README.md). Each written mesh is cross-checked with ../shared/tools/hexcheck.py.
+../shared/data/README.md). Each written mesh is cross-checked with ../shared/tools/hexcheck.py. With
+--rotated (the default) every model is also meshed turned by a fixed random rotation (seeded by its
+name), and the table "Any orientation" compares the two.
 
   tools/make_results.py [--polyhex build/polyhex] [--config configs/polycube.json] [--out results-out]
                         [--models bunny fandisk ...] [--doc docs/RESULTS.md] [--threads 2] [--no-hexcheck]
+                        [--no-rotated]
 """
-import argparse, json, os, subprocess, sys, time
+import argparse, json, os, subprocess, sys, time, zlib
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -44,6 +47,46 @@ def run_model(args, surf, out):
     if (out / "report.json").exists():
         rep = json.loads((out / "report.json").read_text())
     return p.returncode, wall, rep, p.stderr.strip().splitlines()[-3:]
+
+
+def rotation_of(name):
+    """The fixed random rotation of a model: a uniform quaternion from a generator seeded by its name."""
+    import numpy as np
+    q = np.random.default_rng(zlib.crc32(name.encode())).normal(size=4)
+    w, x, y, z = q / np.linalg.norm(q)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def write_rotated(surf, dst):
+    """dst: an OBJ of the surface turned by rotation_of(its name) (read with meshio, written exactly)."""
+    import meshio, numpy as np
+    m = meshio.read(str(surf))
+    P = np.asarray(m.points, dtype=float)[:, :3] @ rotation_of(surf.stem).T
+    tri = np.concatenate([c.data for c in m.cells if c.type == "triangle"])
+    dst.parent.mkdir(parents=True, exist_ok=True)
+    with open(dst, "w") as f:
+        f.writelines("v %.17g %.17g %.17g\n" % tuple(p) for p in P)
+        f.writelines("f %d %d %d\n" % tuple(t + 1) for t in tri)
+
+
+def node_of(n, base):
+    """Node `base` of a report, or its copy in the branch the run kept (`base#k`, k = best.chosen)."""
+    if base in n:
+        return n[base]
+    k = n.get("best", {}).get("metrics", {}).get("chosen")
+    return n.get(f"{base}#{k}", {}) if k else {}
+
+
+def stage_seconds(n):
+    """Seconds per node, the copies of a branched node summed under its id."""
+    out = {}
+    for k, v in n.items():
+        if v.get("ran"):
+            base = k.split("#")[0]
+            out[base] = out.get(base, 0.0) + v["seconds"]
+    return out
 
 
 def hexcheck(mesh, surf):
@@ -84,12 +127,39 @@ def main():
     ap.add_argument("--set", action="append", help="id.param=value passed to every run")
     ap.add_argument("--no-hexcheck", action="store_true")
     ap.add_argument("--reuse", action="store_true", help="reuse OUT/<model>/report.json where it exists (regenerate the doc only)")
+    ap.add_argument("--no-rotated", action="store_true", help="do not mesh the turned copies")
     args = ap.parse_args()
 
     surfaces = sorted((SHARED / "data" / "surfaces").iterdir())
     if args.models:
         surfaces = [p for p in surfaces if p.stem in args.models]
-    rows, stage_rows, check_rows = [], [], []
+    rows, stage_rows, check_rows, rot_rows = [], [], [], []
+
+    def frames_run(rep):
+        o = rep["nodes"].get("orient", {}).get("metrics", {})
+        return o.get("branches", 1), rep["nodes"].get("best", {}).get("metrics", {}).get("chosen", 1)
+
+    def rotated_row(args, name, surf, rep):
+        q0 = rep["nodes"]["quality"]["metrics"]
+        rsurf = Path(args.out) / "rotated" / (name + ".obj")
+        if not (args.reuse and rsurf.exists()):
+            write_rotated(surf, rsurf)
+        code, wall, rr, tail = run_model(args, rsurf, Path(args.out) / "rotated" / name)
+        print(f"{name} (turned): exit {code}, {wall:.1f} s", file=sys.stderr)
+        if rr is None or rr.get("status") != "ok":
+            return f"| {name} | failed: {(rr or {}).get('error', ' '.join(tail)).replace('|', '/')[:160]} |" + " |" * 9
+        q = rr["nodes"]["quality"]["metrics"]
+        ok = (q["inverted"] == 0 and q["sj_min"] >= 0.9 * q0["sj_min"] and q["sj_avg"] >= q0["sj_avg"] - 0.01
+              and abs(q["hexes"] / q0["hexes"] - 1) <= 0.15)
+        rotated_ok.append(ok)
+        b0, c0 = frames_run(rep)
+        b, c = frames_run(rr)
+        return "| {} | {} / {} / {} | {} / {} / {} | {:.2f} | {:+.4f} | {:+.1f} | {} of {} / {} of {} | {:.1f} / {:.1f} | {} |".format(
+            name, fmt(q0["sj_min"]), fmt(q0["sj_avg"]), q0["hexes"], fmt(q["sj_min"]), fmt(q["sj_avg"]), q["hexes"],
+            q["sj_min"] / q0["sj_min"] if q0["sj_min"] > 0 else float("nan"), q["sj_avg"] - q0["sj_avg"],
+            100 * (q["hexes"] / q0["hexes"] - 1), c0, b0, c, b, rep["seconds"], rr["seconds"], "yes" if ok else "**no**")
+
+    rotated_ok = []
     figures = {}  # model -> (sj_min, sj_avg, inverted), for the summary
     for surf in surfaces:
         name = surf.stem
@@ -102,7 +172,7 @@ def main():
             continue
         n = rep["nodes"]
         q = n.get("quality", {}).get("metrics", {})
-        m = lambda node, key: n.get(node, {}).get("metrics", {}).get(key)
+        m = lambda node, key: node_of(n, node).get("metrics", {}).get(key)
         align = m("rotate", "alignment")
         paper = PAPER.get(name)
         best = BEST.get(name)
@@ -132,7 +202,9 @@ def main():
             f"{m('polycube', 'inverted_tets_before_untangle')} -> {m('polycube', 'inverted_tets')} ({m('polycube', 'flat_tets')} flat)",
             fmt(m("polycube", "distortion")), m("polycube", "flipped_after_rounding"),
             fmt(m("polycube", "planarity_error"), ".0e"),
-            " ".join(f"{k}={v['seconds']:.1f}" for k, v in n.items() if v.get("ran"))))
+            " ".join(f"{k}={v:.1f}" for k, v in stage_seconds(n).items())))
+        if not args.no_rotated:
+            rot_rows.append(rotated_row(args, name, surf, rep))
         mesh = out / "hex.vtk"
         if not args.no_hexcheck and mesh.exists():
             hc = hexcheck(mesh, surf)
@@ -157,6 +229,13 @@ def main():
            "", "## PolyCube stages", "",
            "| model | alignment after §4 | charts | corners | splits (multi-orientation / wedge / ramp / order cycle) | inverted tets of the map: final solve -> untangled (flat: 4 vertices on a plane or 3 on an edge) | map distortion (median) | chart pairs out of order | planarity error | seconds per stage |",
            "|---|---|---|---|---|---|---|---|---|---|"] + stage_rows + [
+           "", "## Any orientation", "",
+           "Each model turned by a fixed random rotation (a uniform quaternion from a generator seeded by the CRC-32 of"
+           " its name, `rotation_of` in tools/make_results.py) and meshed with the same config. `frames`: the branch kept"
+           " of the frames run (original / turned). Done when (issue 22): no inverted hex, turned minimum SJ at least 0.9"
+           " of the original's, average at least the original's minus 0.01, hexes within 15 %.", "",
+           "| model | original min / avg / hexes | turned min / avg / hexes | min ratio | avg diff | hexes diff % | frames kept of run (original / turned) | time s (original / turned) | met |",
+           "|---|---|---|---|---|---|---|---|---|"] + rot_rows + ([""] + [f"Met on {sum(rotated_ok)} of {len(rotated_ok)} turned models."] if rotated_ok else []) + [
            "", "## Cross-check with hexcheck.py", "",
            "| model | SJ min hexcheck / ours | SJ min diff | SJ avg diff | inverted hexcheck / ours | Hausdorff mean hexcheck / ours (1e-3) |",
            "|---|---|---|---|---|---|"] + check_rows + [""]

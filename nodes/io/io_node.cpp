@@ -132,6 +132,17 @@ const bool registered_savers = [] {
   reg.add_saver(artefact_name<HexMesh>(), ".vtk", [](const Artefact& a, const std::filesystem::path& p) {
     write_hexmesh(*a.as<HexMesh>(), p, "vtk");
   });
+  auto add_turner = [&reg](auto tag) {
+    using M = decltype(tag);
+    reg.add_turner(artefact_name<M>(), [](const Artefact& a, const Eigen::Matrix3d& R) {
+      M m = *a.as<M>();
+      m.V = m.V * R.transpose();
+      return make_artefact(std::move(m));
+    });
+  };
+  add_turner(SurfaceMesh{});
+  add_turner(TetMesh{});
+  add_turner(HexMesh{});
   return true;
 }();
 

@@ -92,6 +92,7 @@ Artefact into_frame(const FrameParams& p, const Inputs& in, NodeContext& ctx) {
   }
   ctx.metrics["frame"] = c->source;
   ctx.metrics["energy"] = c->energy;
+  ctx.frame = c->R;
   if (c->R == Eigen::Matrix3d::Identity()) return in.items[0];  // the input frame: the input itself
   Mesh m = *in.get<Mesh>(0);
   m.V = rotate_rows(m.V, c->R);
@@ -102,14 +103,16 @@ const bool registered_frame_tets = register_node(
     make_node<FrameParams>("frame_tets", "the tet mesh turned into the frame of one branch's candidate (x -> R x)",
                            frame_params(), {{"tets", artefact_name<TetMesh>()}, {"frames", artefact_name<Frames>()}},
                            artefact_name<TetMesh>(), into_frame<TetMesh>)
-        .with_may_skip());
+        .with_may_skip()
+        .with_frame_role(NodeSpec::FrameRole::enters));
 
 const bool registered_frame_surface = register_node(
     make_node<FrameParams>("frame_surface", "the surface turned into the frame of one branch's candidate (x -> R x)",
                            frame_params(),
                            {{"surface", artefact_name<SurfaceMesh>()}, {"frames", artefact_name<Frames>()}},
                            artefact_name<SurfaceMesh>(), into_frame<SurfaceMesh>)
-        .with_may_skip());
+        .with_may_skip()
+        .with_frame_role(NodeSpec::FrameRole::enters));
 
 const bool registered_unframe = register_node(make_node<FrameParams>(
     "unframe_hexes", "a hex mesh built in one branch's frame turned back into the input's frame (x -> Rᵀ x)",
@@ -121,7 +124,7 @@ const bool registered_unframe = register_node(make_node<FrameParams>(
       HexMesh m = *in.get<HexMesh>(0);
       m.V = rotate_rows(m.V, c->R.transpose());
       return make_artefact(std::move(m));
-    }));
+    }).with_frame_role(NodeSpec::FrameRole::leaves));
 
 }  // namespace
 }  // namespace polyhex

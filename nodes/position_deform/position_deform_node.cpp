@@ -81,6 +81,14 @@ const bool saver_registered = [] {
     surface.replace(surface.size() - std::string(".vtk").size(), std::string::npos, "_surface.vtk");
     write_polycube_vtk(surface, m->U, *m->segmentation);
   });
+  Registry::instance().add_turner(artefact_name<PolyCubeMap>(), [](const Artefact& a, const Eigen::Matrix3d& R) {
+    PolyCubeMap m = *a.as<PolyCubeMap>();
+    TetMesh input = *m.input;
+    input.V = input.V * R.transpose();
+    m.input = std::make_shared<const TetMesh>(std::move(input));
+    m.U = m.U * R.transpose();
+    return make_artefact(std::move(m));
+  });
   return true;
 }();
 
