@@ -109,6 +109,11 @@ struct NodeContext {
   /// Set by a node whose output is in another frame than its inputs (NodeSpec::frame_role enters):
   /// x -> frame x. --save-all turns the outputs of it and of everything downstream of it back.
   std::optional<Eigen::Matrix3d> frame;
+  /// The frame the node's inputs are in (set by the runtime inside a branch of the orientation search;
+  /// none = the input's frame). A node that writes side files writes positions through in_input_frame.
+  std::optional<Eigen::Matrix3d> input_frame;
+  /// V (#V by 3 positions in the inputs' frame) in the input's frame, for side files.
+  RowMatrixX3d in_input_frame(const RowMatrixX3d& V) const { return input_frame ? RowMatrixX3d(V * *input_frame) : V; }
 
   void warn(const std::string& w) { warnings.push_back(w); }
   /// Reports progress and is a cancellation point: \throw Interrupted after SIGINT/SIGTERM.

@@ -260,6 +260,8 @@ RunResult Pipeline::run(const RunOptions& opt) const {
       if (hit.status == CacheLookup::Status::invalid)
         cache_warnings.push_back("cache: ignored entry " + hit.problem + "; recomputed");
     }
+    for (int u : n.input_nodes)
+      if (u >= 0 && frame[size_t(u)] && !ctx.input_frame) ctx.input_frame = frame[size_t(u)];
     event("start", n, 0, "");
     try {
       Artefact out = n.spec->run(n.params, in, ctx);
@@ -276,13 +278,11 @@ RunResult Pipeline::run(const RunOptions& opt) const {
       outputs[i] = out;
       using Role = NodeSpec::FrameRole;
       if (n.spec->frame_role == Role::enters) frame[i] = ctx.frame;
-      if (n.spec->frame_role == Role::keeps)
-        for (int u : n.input_nodes)
-          if (u >= 0 && frame[size_t(u)] && !frame[i]) frame[i] = frame[size_t(u)];
+      if (n.spec->frame_role == Role::keeps) frame[i] = ctx.input_frame;
       if (opt.save_all && out) {
         auto [ext, saver] = Registry::instance().saver(out.type);
         Artefact shown = out;
-        if (frame[i] && *frame[i] != Eigen::Matrix3d::Identity()) {  // written in the input's frame
+        if (saver && frame[i] && *frame[i] != Eigen::Matrix3d::Identity()) {  // written in the input's frame
           const ArtefactTurner* turn = Registry::instance().turner(out.type);
           if (!turn) throw Error("--save-all: no way to turn a " + out.type + " back into the input's frame");
           shown = (*turn)(out, frame[i]->transpose());

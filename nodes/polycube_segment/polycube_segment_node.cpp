@@ -65,7 +65,7 @@ const bool registered = register_node(make_node<P>(
       PolyCubeSegmentation s = segment_polycube(*mesh, p);
       ctx.metrics.update(segmentation_metrics(s));
       for (auto& w : s.warnings) ctx.warn(w);
-      if (ctx.save_all || p.save_surface) write_polycube_vtk(ctx.out_dir / (ctx.id + ".charts.vtk"), mesh->V, s);
+      if (ctx.save_all || p.save_surface) write_polycube_vtk(ctx.out_dir / (ctx.id + ".charts.vtk"), ctx.in_input_frame(mesh->V), s);
       if (!s.valid) {
         if (!p.allow_invalid) require_valid_polycube(s);
         ctx.warn("allow_invalid: passing on an invalid PolyCube structure (failing charts " +

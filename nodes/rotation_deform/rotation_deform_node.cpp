@@ -49,7 +49,9 @@ const bool registered = register_node(make_node<P>(
         } else {
           on_iteration = [&ctx, &p, ext = ext, saver = saver](int k, const TetMesh& m, const RotationIterationStats&) {
             ctx.progress(double(k) / p.iterations, "iteration " + std::to_string(k));
-            saver(make_artefact(m), ctx.out_dir / (ctx.id + ".iter" + std::to_string(k) + ext));
+            TetMesh shown = m;
+            shown.V = ctx.in_input_frame(m.V);
+            saver(make_artefact(std::move(shown)), ctx.out_dir / (ctx.id + ".iter" + std::to_string(k) + ext));
           };
         }
       }

@@ -131,5 +131,5 @@ TEST_CASE("interrupt: SIGINT during rotation_deform stops the run with 130, no m
 }
 
 TEST_CASE("interrupt: SIGTERM during position_deform stops the run with 130, no mesh, no temp file", "[robust][cli]") {
-  interrupt_run(SIGTERM, "segment.charts.vtk", "SIGTERM");
+  interrupt_run(SIGTERM, "segment#1.charts.vtk", "SIGTERM");
 }
