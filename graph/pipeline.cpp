@@ -96,6 +96,7 @@ Pipeline Pipeline::build(const PipelineConfig& cfg) {
     if (!spec) throw ConfigError(where + ": unknown node type `" + nc.type + "`; registered types: " + join(reg.types()));
     ResolvedNode rn;
     rn.id = nc.id;
+    rn.branch = nc.branch;
     rn.spec = spec;
     rn.params = spec->check_params(nc.params, cfg.source + ": node `" + nc.id + "` (`" + spec->type + "`)");
     rn.input_nodes.assign(spec->inputs.size(), -1);
@@ -291,10 +292,18 @@ RunResult Pipeline::run(const RunOptions& opt) const {
       }
     } catch (const NodeError&) {
       throw;
+    } catch (const Interrupted&) {
+      throw;
     } catch (const std::exception& e) {
       rec.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       rec.metrics = ctx.metrics;
       rec.warnings = ctx.warnings;
+      if (n.branch > 0 && !interrupted()) {  // the branch is dropped; the others go on
+        rec.branch_error = e.what();
+        rec.skipped = true;
+        event("done", n, rec.seconds, "");
+        return;
+      }
       throw NodeError(n.id, n.spec->type, e.what());
     } catch (...) {
       throw NodeError(n.id, n.spec->type, "unknown exception");
@@ -363,6 +372,7 @@ json RunResult::report() const {
     j["type"] = n.type;
     j["ran"] = n.ran;
     if (n.skipped) j["skipped"] = true;
+    if (!n.branch_error.empty()) j["branch_error"] = n.branch_error;
     j["seconds"] = n.seconds;
     j["cache_hit"] = n.cache_hit;
     j["metrics"] = n.metrics;

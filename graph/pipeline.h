@@ -7,7 +7,8 @@
 /// artefact types of every edge, and cycles. Running builds one `continue_node` per node, wired along the
 /// inputs, so independent nodes run concurrently; with a cache folder, nodes whose key is cached are
 /// loaded instead of run (graph/cache.h). An exception in a node cancels the graph and comes
-/// back as a NodeError naming the node id and type.
+/// back as a NodeError naming the node id and type, except in a node of a branch (config `branches`):
+/// that branch is dropped, reported as `branch_error`, and the others go on.
 #pragma once
 
 #include <filesystem>
@@ -25,6 +26,7 @@ struct ResolvedNode {
   const NodeSpec* spec = nullptr;
   json params;                  ///< canonical params (every key, defaults filled)
   std::vector<int> input_nodes; ///< per port of spec->inputs, index of the producing node or -1
+  int branch = 0;               ///< NodeConfig::branch: a copy of the config's `branches`, or 0
 };
 
 /// What happened to one node in a run.
@@ -34,6 +36,9 @@ struct NodeRecord {
   bool cache_hit = false;        ///< the output, metrics and warnings were loaded from the artefact cache
   bool ran = false;              ///< the node completed (computed, or loaded from the cache)
   bool skipped = false;          ///< not run: a required input came from a node that produced nothing (NodeSpec::may_skip)
+  /// A node of a branch (config `branches`) that threw: its branch is dropped (its dependants are
+  /// skipped) and the run goes on with the other branches; the message is here and in the report.
+  std::string branch_error;
   std::string cache_key;         ///< the key its output was looked up and stored under ("" when not cached)
   json metrics = json::object();
   std::vector<std::string> warnings;

@@ -8,7 +8,7 @@ name), and the table "Any orientation" compares the two.
 
   tools/make_results.py [--polyhex build/polyhex] [--config configs/polycube.json] [--out results-out]
                         [--models bunny fandisk ...] [--doc docs/RESULTS.md] [--threads 2] [--no-hexcheck]
-                        [--no-rotated]
+                        [--no-rotated | --rotated-models joint fandisk ...]
 """
 import argparse, json, os, subprocess, sys, time, zlib
 from pathlib import Path
@@ -128,6 +128,7 @@ def main():
     ap.add_argument("--no-hexcheck", action="store_true")
     ap.add_argument("--reuse", action="store_true", help="reuse OUT/<model>/report.json where it exists (regenerate the doc only)")
     ap.add_argument("--no-rotated", action="store_true", help="do not mesh the turned copies")
+    ap.add_argument("--rotated-models", nargs="*", help="mesh turned copies of these models only (default: all)")
     args = ap.parse_args()
 
     surfaces = sorted((SHARED / "data" / "surfaces").iterdir())
@@ -203,7 +204,7 @@ def main():
             fmt(m("polycube", "distortion")), m("polycube", "flipped_after_rounding"),
             fmt(m("polycube", "planarity_error"), ".0e"),
             " ".join(f"{k}={v:.1f}" for k, v in stage_seconds(n).items())))
-        if not args.no_rotated:
+        if not args.no_rotated and (not args.rotated_models or name in args.rotated_models):
             rot_rows.append(rotated_row(args, name, surf, rep))
         mesh = out / "hex.vtk"
         if not args.no_hexcheck and mesh.exists():

@@ -42,7 +42,8 @@ const bool registered = register_node(make_node<SelectParams>(
         if (best < 0 || inverted < best_inverted || (inverted == best_inverted && sj_min > best_min))
           best = k, best_inverted = inverted, best_min = sj_min;
       }
-      if (best < 0) throw InvalidInput("no candidate mesh: every branch was skipped or none is connected");
+      if (best < 0) throw InvalidInput(
+            "no candidate mesh: every branch was skipped or failed (the report gives each failed node's branch_error)");
       ctx.metrics["candidates"] = all;
       ctx.metrics["chosen"] = best + 1;
       return in.items[size_t(best)];

@@ -250,6 +250,17 @@ TEST_CASE("config branches: copies side by side, ${branch}, skipped copies", "[g
                {"id":"keep","type":"test_keep","inputs":{"surface":"src"}},
                {"id":"sum","type":"test_merge","inputs":{"a":"keep"}}]})");
   REQUIRE_THROWS_WITH(parse_config(bad, "x.json"), Contains("name one copy, `keep#1` to `keep#2`"));
+  // A node of a branch that throws drops its branch, not the run; outside the branches it fails the run.
+  Pipeline failing = build(R"({"branches":{"count":3,"nodes":["keep","bad"]},
+      "nodes":[{"id":"src","type":"test_source/box","params":{"size":2}},
+               {"id":"keep","type":"test_keep","params":{"below":"${branch}"},"inputs":{"surface":"src"}},
+               {"id":"bad","type":"test_fail","inputs":["keep"]},
+               {"id":"after","type":"test_merge","inputs":{"a":"src"}}]})");
+  RunResult f = failing.run(opt);
+  CHECK(f.error.empty());
+  CHECK_THAT(f.report()["nodes"]["bad#3"]["branch_error"].get<std::string>(), Contains("not good enough"));
+  CHECK(f.report()["nodes"]["bad#1"]["skipped"] == true);
+  CHECK(f.report()["nodes"]["after"]["metrics"]["vertices"] == 4);
   bad["branches"]["nodes"] = json::array({"nothing"});
   REQUIRE_THROWS_WITH(parse_config(bad, "x.json"), Contains("no node with id `nothing`"));
   bad = json::parse(R"({"nodes":[{"id":"a#1","type":"test_source/box"}]})");
