@@ -292,8 +292,6 @@ RunResult Pipeline::run(const RunOptions& opt) const {
       }
     } catch (const NodeError&) {
       throw;
-    } catch (const Interrupted&) {
-      throw;
     } catch (const std::exception& e) {
       rec.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       rec.metrics = ctx.metrics;
