@@ -263,17 +263,20 @@ RunResult Pipeline::run(const RunOptions& opt) const {
     }
     for (int u : n.input_nodes)
       if (u >= 0 && frame[size_t(u)] && !ctx.input_frame) ctx.input_frame = frame[size_t(u)];
+    // The node produced nothing (a may_skip node's empty result, or `error` from a node of a branch):
+    // its dependants are skipped.
+    auto produced_nothing = [&](std::string error) {
+      rec.skipped = true;
+      rec.branch_error = std::move(error);
+      rec.metrics = ctx.metrics;
+      rec.warnings = ctx.warnings;
+      rec.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      event("done", n, rec.seconds, "");
+    };
     event("start", n, 0, "");
     try {
       Artefact out = n.spec->run(n.params, in, ctx);
-      if (!out && n.spec->may_skip) {
-        rec.skipped = true;
-        rec.metrics = std::move(ctx.metrics);
-        rec.warnings = std::move(ctx.warnings);
-        rec.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        event("done", n, rec.seconds, "");
-        return;
-      }
+      if (!out && n.spec->may_skip) return produced_nothing("");
       if (!n.spec->output.empty() && (!out || out.type != n.spec->output))
         throw Error("produced " + (out ? out.type : std::string("nothing")) + " instead of " + n.spec->output);
       outputs[i] = out;
@@ -293,15 +296,10 @@ RunResult Pipeline::run(const RunOptions& opt) const {
     } catch (const NodeError&) {
       throw;
     } catch (const std::exception& e) {
+      if (n.branch > 0 && !interrupted()) return produced_nothing(e.what());  // the branch is dropped; the others go on
       rec.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       rec.metrics = ctx.metrics;
       rec.warnings = ctx.warnings;
-      if (n.branch > 0 && !interrupted()) {  // the branch is dropped; the others go on
-        rec.branch_error = e.what();
-        rec.skipped = true;
-        event("done", n, rec.seconds, "");
-        return;
-      }
       throw NodeError(n.id, n.spec->type, e.what());
     } catch (...) {
       throw NodeError(n.id, n.spec->type, "unknown exception");

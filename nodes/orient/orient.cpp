@@ -27,14 +27,22 @@ struct Bin {
   double w = 0;
 };
 
-std::vector<Bin> normal_bins(const SurfaceMesh& s, int cells) {
-  std::vector<Vec3> sum(size_t(6 * cells * cells), Vec3::Zero());
-  std::vector<double> weight(sum.size(), 0);
+/// fn(cr, |cr|) for every triangle of positive, finite area; cr = (b - a) x (c - a), twice the area
+/// times the unit normal.
+template <class Fn>
+void for_each_normal(const SurfaceMesh& s, Fn fn) {
   for (Eigen::Index f = 0; f < s.F.rows(); ++f) {
     const Vec3 a = s.V.row(s.F(f, 0)), b = s.V.row(s.F(f, 1)), c = s.V.row(s.F(f, 2));
     const Vec3 cr = (b - a).cross(c - a);
     const double len = cr.norm();
-    if (!(len > 0) || !std::isfinite(len)) continue;
+    if (len > 0 && std::isfinite(len)) fn(cr, len);
+  }
+}
+
+std::vector<Bin> normal_bins(const SurfaceMesh& s, int cells) {
+  std::vector<Vec3> sum(size_t(6 * cells * cells), Vec3::Zero());
+  std::vector<double> weight(sum.size(), 0);
+  for_each_normal(s, [&](const Vec3& cr, double len) {
     const Vec3 u = cr / len;
     int axis = 0;
     for (int i = 1; i < 3; ++i)
@@ -45,7 +53,7 @@ std::vector<Bin> normal_bins(const SurfaceMesh& s, int cells) {
     const size_t k = size_t((face * cells + i) * cells + j);
     sum[k] += 0.5 * cr;  // area times the unit normal
     weight[k] += 0.5 * len;
-  }
+  });
   std::vector<Bin> bins;
   for (size_t k = 0; k < sum.size(); ++k)
     if (weight[k] > 0 && sum[k].norm() > 0) bins.push_back({sum[k].normalized(), weight[k]});
@@ -129,12 +137,7 @@ void check(const OrientParams& p) {
 std::vector<Bin> triangle_normals(const SurfaceMesh& s) {
   std::vector<Bin> out;
   out.reserve(size_t(s.F.rows()));
-  for (Eigen::Index f = 0; f < s.F.rows(); ++f) {
-    const Vec3 a = s.V.row(s.F(f, 0)), b = s.V.row(s.F(f, 1)), c = s.V.row(s.F(f, 2));
-    const Vec3 cr = (b - a).cross(c - a);
-    const double len = cr.norm();
-    if (len > 0 && std::isfinite(len)) out.push_back({cr / len, 0.5 * len});
-  }
+  for_each_normal(s, [&](const Vec3& cr, double len) { out.push_back({cr / len, 0.5 * len}); });
   return out;
 }
 
