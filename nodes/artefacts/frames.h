@@ -22,6 +22,13 @@ struct FrameCandidate {
 /// increasing energy, no two within the search's distinct angle of each other (up to the cube's symmetries).
 struct Frames {
   std::vector<FrameCandidate> candidates;
+
+  /// The candidate that runs as branch k, or null.
+  const FrameCandidate* of_branch(int k) const {
+    for (const FrameCandidate& c : candidates)
+      if (c.branch == k) return &c;
+    return nullptr;
+  }
 };
 
 template <class T>

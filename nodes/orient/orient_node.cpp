@@ -73,19 +73,12 @@ ParamSet<FrameParams> frame_params() {
                                      1, 8);
 }
 
-/// The candidate that runs as branch k, or null.
-const FrameCandidate* candidate_of(const Frames& f, int k) {
-  for (const FrameCandidate& c : f.candidates)
-    if (c.branch == k) return &c;
-  return nullptr;
-}
-
 /// V with every row x replaced by R x.
 RowMatrixX3d rotate_rows(const RowMatrixX3d& V, const Eigen::Matrix3d& R) { return V * R.transpose(); }
 
 template <class Mesh>
 Artefact into_frame(const FrameParams& p, const Inputs& in, NodeContext& ctx) {
-  const FrameCandidate* c = candidate_of(*in.get<Frames>(1), p.branch);
+  const FrameCandidate* c = in.get<Frames>(1)->of_branch(p.branch);
   if (!c) {
     ctx.metrics["frame"] = nullptr;
     return Artefact{};
@@ -118,7 +111,7 @@ const bool registered_unframe = register_node(make_node<FrameParams>(
     "unframe_hexes", "a hex mesh built in one branch's frame turned back into the input's frame (x -> Rᵀ x)",
     frame_params(), {{"hexes", artefact_name<HexMesh>()}, {"frames", artefact_name<Frames>()}},
     artefact_name<HexMesh>(), [](const FrameParams& p, const Inputs& in, NodeContext& ctx) {
-      const FrameCandidate* c = candidate_of(*in.get<Frames>(1), p.branch);
+      const FrameCandidate* c = in.get<Frames>(1)->of_branch(p.branch);
       if (!c) throw InvalidInput("no candidate frame runs as branch " + std::to_string(p.branch));
       if (c->R == Eigen::Matrix3d::Identity()) return in.items[0];
       HexMesh m = *in.get<HexMesh>(0);
