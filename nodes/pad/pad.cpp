@@ -133,12 +133,14 @@ BoundaryDefects find_boundary_defects(const HexMesh& m) {
   return d;
 }
 
-HexMesh remove_nonmanifold_boundary(const HexMesh& mesh, long* edges, long* vertices, long* removed) {
-  HexMesh cur = mesh;
-  long gone = 0;
+NonmanifoldRepair remove_nonmanifold_boundary(const HexMesh& mesh) {
+  NonmanifoldRepair out;
+  HexMesh& cur = out.mesh;
+  cur = mesh;
+  long& gone = out.removed;
   BoundaryDefects d = find_boundary_defects(cur);
-  if (edges) *edges = long(d.edges.size());
-  if (vertices) *vertices = long(d.vertices.size());
+  out.edges = long(d.edges.size());
+  out.vertices = long(d.vertices.size());
   for (int round = 0; round < 20 && !(d.edges.empty() && d.vertices.empty()); ++round) {
     throw_if_interrupted();
     const BoundaryFaces b = boundary_faces(cur);
@@ -175,13 +177,14 @@ HexMesh remove_nonmanifold_boundary(const HexMesh& mesh, long* edges, long* vert
     gone += k;
     d = find_boundary_defects(cur);
   }
-  if (removed) *removed = gone;
-  return cur;
+  return out;
 }
 
-HexMesh peel_boundary_hexes(const HexMesh& mesh, double max_sj, int rounds, long* removed) {
-  HexMesh cur = mesh;
-  long gone = 0;
+Peeled peel_boundary_hexes(const HexMesh& mesh, double max_sj, int rounds) {
+  Peeled out;
+  HexMesh& cur = out.mesh;
+  cur = mesh;
+  long& gone = out.removed;
   for (int round = 0; round < rounds; ++round) {
     throw_if_interrupted();
     const BoundaryFaces b = boundary_faces(cur);
@@ -195,13 +198,14 @@ HexMesh peel_boundary_hexes(const HexMesh& mesh, double max_sj, int rounds, long
     cur = without_hexes(cur, drop);
     gone += k;
   }
-  if (removed) *removed = gone;
-  return cur;
+  return out;
 }
 
-HexMesh remove_boundary_doublets(const HexMesh& mesh, long* doublets, long* removed) {
-  HexMesh cur = mesh;
-  long found = 0, gone = 0;
+DoubletRepair remove_boundary_doublets(const HexMesh& mesh) {
+  DoubletRepair out;
+  HexMesh& cur = out.mesh;
+  cur = mesh;
+  long &found = out.doublets, &gone = out.removed;
   std::vector<int> valence;
   long bad = boundary_valence(cur, valence);  // non-manifold boundary edges: removals must not add any
   for (int round = 0; round < 5; ++round) {
@@ -274,20 +278,32 @@ HexMesh remove_boundary_doublets(const HexMesh& mesh, long* doublets, long* remo
     valence.swap(next_valence);
     gone += k;
   }
-  if (doublets) *doublets = found;
-  if (removed) *removed = gone;
-  return cur;
+  return out;
 }
 
 HexMesh pad_boundary(const HexMesh& input, const SurfaceMesh* surface, const PadParams& p, PadStats* stats) {
   const auto t0 = std::chrono::steady_clock::now();
   check_hex_mesh(input);
   PadStats st;
-  const HexMesh peeled = p.peel_rounds > 0 ? peel_boundary_hexes(input, p.peel_sj, p.peel_rounds, &st.peeled) : input;
-  HexMesh repaired = p.repair_nonmanifold ? remove_nonmanifold_boundary(peeled, &st.nonmanifold_edges, &st.nonmanifold_vertices,
-                                                                        &st.nonmanifold_removed)
-                                           : peeled;
-  const HexMesh mesh = p.remove_doublets ? remove_boundary_doublets(repaired, &st.doublets, &st.hexes_removed) : repaired;
+  HexMesh mesh = input;
+  if (p.peel_rounds > 0) {
+    Peeled r = peel_boundary_hexes(mesh, p.peel_sj, p.peel_rounds);
+    st.peeled = r.removed;
+    mesh = std::move(r.mesh);
+  }
+  if (p.repair_nonmanifold) {
+    NonmanifoldRepair r = remove_nonmanifold_boundary(mesh);
+    st.nonmanifold_edges = r.edges;
+    st.nonmanifold_vertices = r.vertices;
+    st.nonmanifold_removed = r.removed;
+    mesh = std::move(r.mesh);
+  }
+  if (p.remove_doublets) {
+    DoubletRepair r = remove_boundary_doublets(mesh);
+    st.doublets = r.doublets;
+    st.hexes_removed = r.removed;
+    mesh = std::move(r.mesh);
+  }
   {
     const BoundaryDefects left = find_boundary_defects(mesh);
     st.nonmanifold_left = long(left.edges.size() + left.vertices.size());

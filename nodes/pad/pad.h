@@ -10,12 +10,14 @@
 
 namespace polyhex {
 
+/// The params of pad_boundary. Their ranges are declared once, in the binding (pad_node.cpp), which checks
+/// them and lists them in `polyhex nodes`.
 struct PadParams {
-  double thickness = 0.4;   ///< inward offset of the inner copies, fraction of the local hex edge, (0, 0.9]
-  int max_halvings = 10;    ///< halve a vertex's offset at most this often while a hex it touches is inverted, [0, 30]
+  double thickness = 0.4;   ///< inward offset of the inner copies, fraction of the local hex edge
+  int max_halvings = 10;    ///< halve a vertex's offset at most this often while a hex it touches is inverted
   bool remove_doublets = true;  ///< first remove hexes at boundary doublets (see remove_boundary_doublets)
-  int peel_rounds = 0;      ///< first remove boundary hexes with corner scaled Jacobian <= peel_sj, this many times, [0, 20]
-  double peel_sj = 0.0;     ///< see peel_rounds, [-1, 0.5]
+  int peel_rounds = 0;      ///< first remove boundary hexes with corner scaled Jacobian <= peel_sj, this many times
+  double peel_sj = 0.0;     ///< see peel_rounds
   bool repair_nonmanifold = true;  ///< first remove hexes at non-manifold boundary edges and vertices (remove_nonmanifold_boundary)
 };
 
@@ -45,21 +47,39 @@ struct BoundaryDefects {
 /// the layer hexes there.
 BoundaryDefects find_boundary_defects(const HexMesh& mesh);
 
+/// remove_nonmanifold_boundary's result.
+struct NonmanifoldRepair {
+  HexMesh mesh;        ///< the mesh without the removed hexes (a copy of the input if it has no defect)
+  long edges = 0;      ///< non-manifold boundary edges found in the input
+  long vertices = 0;   ///< non-manifold boundary vertices found in the input
+  long removed = 0;    ///< hexes removed
+};
+
+/// peel_boundary_hexes's result.
+struct Peeled {
+  HexMesh mesh;        ///< the mesh without the peeled hexes (never empty)
+  long removed = 0;    ///< hexes removed
+};
+
+/// remove_boundary_doublets's result.
+struct DoubletRepair {
+  HexMesh mesh;        ///< the mesh without the removed hexes (a copy of the input if it has no doublet)
+  long doublets = 0;   ///< boundary doublet vertices found in the input
+  long removed = 0;    ///< hexes removed
+};
+
 /// Removes hexes until the boundary is manifold: per non-manifold edge or vertex, the hex with a boundary
 /// face on it that has the most boundary faces (then the lowest corner scaled Jacobian, then the lowest
 /// index); repeated while defects remain, at most 20 rounds. Unused vertices are dropped.
-/// \param edges, vertices  out (optional): defects found in the input   \param removed  out: hexes removed
-/// \return the mesh without those hexes (a copy of the input if it has no defect)
 /// \throw Interrupted after SIGINT/SIGTERM
-HexMesh remove_nonmanifold_boundary(const HexMesh& mesh, long* edges = nullptr, long* vertices = nullptr,
-                                    long* removed = nullptr);
+NonmanifoldRepair remove_nonmanifold_boundary(const HexMesh& mesh);
 
 /// Removes the hexes with a boundary face whose corner scaled Jacobian is <= max_sj, `rounds` times (each
 /// round sees the new boundary). The layer that padding adds in their place starts from the surface and is
 /// easier to untangle than a folded hex pressed against it.
-/// \param removed  out (optional): hexes removed   \return the mesh without them (never empty: a round that
-/// would remove every hex is skipped)   \throw Interrupted after SIGINT/SIGTERM
-HexMesh peel_boundary_hexes(const HexMesh& mesh, double max_sj, int rounds, long* removed = nullptr);
+/// A round that would remove every hex is skipped.
+/// \throw Interrupted after SIGINT/SIGTERM
+Peeled peel_boundary_hexes(const HexMesh& mesh, double max_sj, int rounds);
 
 /// Removes hexes at boundary doublets. A doublet is a boundary vertex in only two boundary quads: they
 /// share both of its boundary edges, so on a smooth surface both are flat (180 degrees) at it, and after
@@ -70,9 +90,9 @@ HexMesh peel_boundary_hexes(const HexMesh& mesh, double max_sj, int rounds, long
 /// would make a boundary edge non-manifold (that was not), each doublet in turn takes the first of its
 /// candidates, in the same order, whose removal (with those taken so far) does not; a doublet with no
 /// such candidate is left. Unused vertices are dropped.
-/// \param mesh  conforming hex mesh   \param doublets, removed  out (optional): counts
-/// \return the mesh without those hexes (the input itself if there is no doublet)
-HexMesh remove_boundary_doublets(const HexMesh& mesh, long* doublets = nullptr, long* removed = nullptr);
+/// \param mesh  conforming hex mesh
+/// \throw Interrupted after SIGINT/SIGTERM
+DoubletRepair remove_boundary_doublets(const HexMesh& mesh);
 
 /// Extrudes the boundary into one layer of hexes. Every boundary vertex v is duplicated: the inner copy
 /// replaces v in the existing hexes and moves inward along the averaged inward normal of its boundary

@@ -73,15 +73,13 @@ TEST_CASE("remove_boundary_doublets: when the preferred hex would open a non-man
   for (std::array<int, 3> c : {std::array<int, 3>{-1, 0, 1}, {0, 1, 2}, {1, 1, 2}}) cells.push_back(c);
   const HexMesh m = cubes_with_slit(cells, {0, 1, 2});
   REQUIRE(find_boundary_defects(m).edges.empty());
-  long doublets = -1, removed = -1;
-  const HexMesh r = remove_boundary_doublets(m, &doublets, &removed);
-  CHECK(doublets == 1);
-  CHECK(removed == 1);
+  const DoubletRepair repair = remove_boundary_doublets(m);
+  const HexMesh& r = repair.mesh;
+  CHECK(repair.doublets == 1);
+  CHECK(repair.removed == 1);
   REQUIRE(r.H.rows() == m.H.rows() - 1);
   CHECK(find_boundary_defects(r).edges.empty());
-  long again = -1;
-  remove_boundary_doublets(r, &again);
-  CHECK(again == 0);
+  CHECK(remove_boundary_doublets(r).doublets == 0);
   // the cube that went is cell (0,1,1): no remaining hex has its centre (0.5, 1.5, 1.5)
   for (Eigen::Index h = 0; h < r.H.rows(); ++h) {
     Eigen::RowVector3d c = Eigen::RowVector3d::Zero();
@@ -92,10 +90,10 @@ TEST_CASE("remove_boundary_doublets: when the preferred hex would open a non-man
 
 TEST_CASE("remove_boundary_doublets removes the hex wrapped around a doublet edge", "[pad]") {
   const HexMesh m = wrapped_pair();
-  long doublets = -1, removed = -1;
-  const HexMesh r = remove_boundary_doublets(m, &doublets, &removed);
-  CHECK(doublets == 2);
-  CHECK(removed == 1);
+  const DoubletRepair repair = remove_boundary_doublets(m);
+  const HexMesh& r = repair.mesh;
+  CHECK(repair.doublets == 2);
+  CHECK(repair.removed == 1);
   REQUIRE(r.H.rows() == 1);
   CHECK(r.V.rows() == 8);  // p and q dropped
   CHECK(hex_quality(r, nullptr).inverted == 0);
@@ -119,10 +117,10 @@ TEST_CASE("remove_boundary_doublets removes the hex wrapped around a doublet edg
 
 TEST_CASE("remove_boundary_doublets leaves a mesh without doublets unchanged", "[pad]") {
   const HexMesh g = test::grid_hex_mesh(3, 2, 2);
-  long doublets = -1, removed = -1;
-  const HexMesh r = remove_boundary_doublets(g, &doublets, &removed);
-  CHECK(doublets == 0);
-  CHECK(removed == 0);
+  const DoubletRepair repair = remove_boundary_doublets(g);
+  const HexMesh& r = repair.mesh;
+  CHECK(repair.doublets == 0);
+  CHECK(repair.removed == 0);
   CHECK(r.V == g.V);
   CHECK(r.H == g.H);
 }

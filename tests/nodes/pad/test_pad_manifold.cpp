@@ -63,11 +63,11 @@ TEST_CASE("find_boundary_defects: manifold meshes, concave ones included, have n
 TEST_CASE("remove_nonmanifold_boundary removes one of the touching cubes and leaves a clean mesh alone", "[pad]") {
   for (const std::vector<int>& cells : {std::vector<int>{0, 3}, std::vector<int>{0, 7}}) {
     const HexMesh m = grid_cells(2, 2, cells[1] == 7 ? 2 : 1, cells);
-    long edges = -1, vertices = -1, removed = -1;
-    const HexMesh r = remove_nonmanifold_boundary(m, &edges, &vertices, &removed);
-    CHECK(edges == (cells[1] == 3 ? 1 : 0));
-    CHECK(vertices == (cells[1] == 3 ? 2 : 1));
-    CHECK(removed == 1);
+    const NonmanifoldRepair repair = remove_nonmanifold_boundary(m);
+    const HexMesh& r = repair.mesh;
+    CHECK(repair.edges == (cells[1] == 3 ? 1 : 0));
+    CHECK(repair.vertices == (cells[1] == 3 ? 2 : 1));
+    CHECK(repair.removed == 1);
     CHECK(r.H.rows() == 1);
     CHECK(r.V.rows() == 8);  // unused vertices dropped
     const BoundaryDefects d = find_boundary_defects(r);
@@ -75,10 +75,9 @@ TEST_CASE("remove_nonmanifold_boundary removes one of the touching cubes and lea
     CHECK(d.vertices.empty());
   }
   const HexMesh g = grid_cells(2, 2, 1, {0, 1, 2});
-  long removed = -1;
-  const HexMesh r = remove_nonmanifold_boundary(g, nullptr, nullptr, &removed);
-  CHECK(removed == 0);
-  CHECK(r.H == g.H);
+  const NonmanifoldRepair clean = remove_nonmanifold_boundary(g);
+  CHECK(clean.removed == 0);
+  CHECK(clean.mesh.H == g.H);
 }
 
 TEST_CASE("pad_boundary repairs a non-manifold edge first: manifold result, no inverted hex", "[pad]") {
@@ -114,16 +113,16 @@ TEST_CASE("peel_boundary_hexes removes inverted boundary hexes only", "[pad]") {
   hex_scaled_jacobians(m, sj, corner);
   const long inverted = long((corner.array() <= 0).count());
   REQUIRE(inverted >= 2);  // the corner hex and some around the centre
-  long removed = -1;
-  const HexMesh r = peel_boundary_hexes(m, 0.0, 3, &removed);
-  CHECK(removed == 1);
+  const Peeled peeled = peel_boundary_hexes(m, 0.0, 3);
+  const HexMesh& r = peeled.mesh;
+  CHECK(peeled.removed == 1);
   CHECK(r.H.rows() == 63);
   hex_scaled_jacobians(r, sj, corner);
   CHECK(long((corner.array() <= 0).count()) == inverted - 1);
   // a bar of cubes whose every hex is inverted: a round that would remove them all is skipped
   HexMesh bar = test::grid_hex_mesh(2, 1, 1);
   bar.V.col(0) *= -1.0;  // mirrored: every hex inverted
-  const HexMesh kept = peel_boundary_hexes(bar, 0.0, 3, &removed);
-  CHECK(removed == 0);
-  CHECK(kept.H.rows() == 2);
+  const Peeled kept = peel_boundary_hexes(bar, 0.0, 3);
+  CHECK(kept.removed == 0);
+  CHECK(kept.mesh.H.rows() == 2);
 }
