@@ -19,7 +19,7 @@
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
 #include "tests/helpers/voxel_shapes.h"
-#include "tests/nodes/hex_extract/hex_test_util.h"
+#include "tests/helpers/voxel_maps.h"
 
 using namespace polyhex;
 using Catch::Matchers::Equals;

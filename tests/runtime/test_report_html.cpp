@@ -14,7 +14,7 @@
 #include "runtime/errors.h"
 #include "runtime/report_html.h"
 #include "tests/helpers/cli.h"
-#include "tests/nodes/quality/hex_fixtures.h"
+#include "tests/helpers/hex_fixtures.h"
 
 using namespace polyhex;
 using json = nlohmann::json;

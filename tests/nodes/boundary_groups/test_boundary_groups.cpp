@@ -9,7 +9,7 @@
 #include "nodes/hex_extract/hex_extract.h"
 #include "nodes/quality/quality.h"
 #include "runtime/errors.h"
-#include "tests/nodes/hex_extract/hex_test_util.h"
+#include "tests/helpers/voxel_maps.h"
 
 using namespace polyhex;
 using Catch::Matchers::Contains;

@@ -6,7 +6,7 @@
 
 #include "nodes/hex_extract/hex_extract.h"
 #include "nodes/quality/quality.h"
-#include "tests/nodes/hex_extract/hex_test_util.h"
+#include "tests/helpers/voxel_maps.h"
 
 using namespace polyhex;
 

@@ -6,7 +6,7 @@
 #include "graph/node.h"
 #include "nodes/hex_from_tets/split.h"
 #include "nodes/quality/quality.h"
-#include "tests/nodes/quality/hex_fixtures.h"
+#include "tests/helpers/hex_fixtures.h"
 
 using namespace polyhex;
 using namespace polyhex::test;

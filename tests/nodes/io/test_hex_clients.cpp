@@ -14,7 +14,7 @@
 #include "nodes/io/hexmesh_io.h"
 #include "tests/helpers/cli.h"
 #include "tests/helpers/report.h"
-#include "tests/nodes/io/io_test_util.h"
+#include "tests/helpers/io_checks.h"
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;

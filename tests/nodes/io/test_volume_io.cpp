@@ -9,7 +9,7 @@
 #include "nodes/io/hexmesh_io.h"
 #include "nodes/io/tetmesh_io.h"
 #include "runtime/errors.h"
-#include "tests/nodes/io/io_test_util.h"
+#include "tests/helpers/io_checks.h"
 
 using namespace polyhex;
 using namespace polyhex::iotest;

@@ -7,7 +7,7 @@
 #include "nodes/optimize/optimize.h"
 #include "nodes/quality/quality.h"
 #include "nodes/quality/triangle_tree.h"
-#include "tests/nodes/hex_extract/hex_test_util.h"
+#include "tests/helpers/voxel_maps.h"
 
 using namespace polyhex;
 

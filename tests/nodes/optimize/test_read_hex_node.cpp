@@ -5,7 +5,7 @@
 
 #include "graph/node.h"
 #include "nodes/io/hexmesh_io.h"
-#include "tests/nodes/quality/hex_fixtures.h"
+#include "tests/helpers/hex_fixtures.h"
 
 using namespace polyhex;
 

@@ -4,7 +4,7 @@
 #include "nodes/optimize/hex_corners.h"
 #include "nodes/optimize/untangle_global.h"
 #include "nodes/quality/quality.h"
-#include "tests/nodes/hex_extract/hex_test_util.h"
+#include "tests/helpers/voxel_maps.h"
 
 using namespace polyhex;
 

@@ -3,7 +3,7 @@
 
 #include "nodes/pad/pad.h"
 #include "nodes/quality/quality.h"
-#include "tests/nodes/hex_extract/hex_test_util.h"
+#include "tests/helpers/voxel_maps.h"
 
 using namespace polyhex;
 

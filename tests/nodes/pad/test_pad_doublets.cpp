@@ -7,7 +7,7 @@
 
 #include "nodes/pad/pad.h"
 #include "nodes/quality/quality.h"
-#include "tests/nodes/quality/hex_fixtures.h"
+#include "tests/helpers/hex_fixtures.h"
 
 using namespace polyhex;
 

@@ -11,7 +11,7 @@
 #include "nodes/io/surface_io.h"
 #include "nodes/quality/quality.h"
 #include "nodes/quality/quality_json.h"
-#include "tests/nodes/quality/hex_fixtures.h"
+#include "tests/helpers/hex_fixtures.h"
 
 using namespace polyhex;
 using namespace polyhex::test;

@@ -10,7 +10,7 @@
 #include "nodes/quality/quality.h"
 #include "nodes/quality/quality_json.h"
 #include "nodes/quality/triangle_tree.h"
-#include "tests/nodes/quality/hex_fixtures.h"
+#include "tests/helpers/hex_fixtures.h"
 
 using namespace polyhex;
 using namespace polyhex::test;

@@ -7,7 +7,7 @@
 #include "graph/node.h"
 #include "nodes/shapes/shapes.h"
 #include "runtime/errors.h"
-#include "tests/nodes/shapes/surface_checks.h"
+#include "tests/helpers/surface_checks.h"
 
 using namespace polyhex;
 using namespace polyhex::test;

@@ -12,7 +12,7 @@
 #include "nodes/shapes/shapes.h"
 #include "nodes/tetrahedralize/tetgen.h"
 #include "runtime/errors.h"
-#include "tests/nodes/shapes/surface_checks.h"
+#include "tests/helpers/surface_checks.h"
 
 using namespace polyhex;
 using namespace polyhex::test;

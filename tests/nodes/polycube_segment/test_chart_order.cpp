@@ -10,7 +10,7 @@
 
 #include "nodes/polycube_segment/chart_order.h"
 #include "nodes/polycube_segment/polycube_segment.h"
-#include "tests/nodes/polycube_segment/fixtures.h"
+#include "tests/helpers/segment_fixtures.h"
 
 using namespace polyhex;
 using namespace polyhex::test;

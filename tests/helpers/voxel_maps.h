@@ -10,7 +10,7 @@
 #include "nodes/polycube_segment/polycube_segment.h"
 #include "nodes/tetrahedralize/tetgen.h"
 #include "tests/helpers/voxel_shapes.h"
-#include "tests/nodes/quality/hex_fixtures.h"  // grid_hex_mesh
+#include "tests/helpers/hex_fixtures.h"  // grid_hex_mesh
 
 namespace polyhex::test {
 

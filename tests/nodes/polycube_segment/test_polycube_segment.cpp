@@ -13,7 +13,7 @@
 #include "nodes/polycube_segment/polycube_segment.h"
 #include "nodes/rotation_deform/rotation_deform.h"
 #include "runtime/errors.h"
-#include "tests/nodes/polycube_segment/fixtures.h"
+#include "tests/helpers/segment_fixtures.h"
 
 using namespace polyhex;
 using namespace polyhex::test;

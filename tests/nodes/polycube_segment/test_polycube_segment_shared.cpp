@@ -11,7 +11,7 @@
 #include "nodes/polycube_segment/polycube_segment.h"
 #include "nodes/rotation_deform/rotation_deform.h"
 #include "nodes/tetrahedralize/tetgen.h"
-#include "tests/nodes/polycube_segment/fixtures.h"
+#include "tests/helpers/segment_fixtures.h"
 
 using namespace polyhex;
 
