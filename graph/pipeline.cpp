@@ -180,134 +180,55 @@ std::string Pipeline::dot() const {
   return s.str();
 }
 
-RunResult Pipeline::run(const RunOptions& opt) const {
-  namespace flow = oneapi::tbb::flow;
-  std::error_code ec;
-  std::filesystem::create_directories(opt.out_dir, ec);
-  if (ec || !std::filesystem::is_directory(opt.out_dir))
-    throw IOError(opt.out_dir.string() + ": cannot create output folder" + (ec ? ": " + ec.message() : ""));
+namespace {
 
-  RunResult result;
-  result.nodes.resize(nodes_.size());
-  std::unique_ptr<ArtefactCache> cache;
-  std::vector<std::string> keys(nodes_.size());
-  if (!opt.cache_dir.empty()) {
-    cache = std::make_unique<ArtefactCache>(opt.cache_dir);
-    keys = cache_keys();
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+/// One run's state and the steps that run one node: its inputs, its cache key, a cache hit, the
+/// computation (with --save-all's files) and its record. Nodes run concurrently: node i writes only its
+/// own slots (outputs_[i], identity_[i], frame_[i], result.nodes[i]) and reads those of its inputs,
+/// which the flow graph completed before it started.
+class NodeRunner {
+ public:
+  NodeRunner(const std::vector<ResolvedNode>& nodes, const RunOptions& opt, RunResult& result)
+      : nodes_(nodes), opt_(opt), result_(result), outputs_(nodes.size()), identity_(nodes.size()),
+        keys_(nodes.size()), frame_(nodes.size()) {}
+
+  /// Sets up the artefact cache (opt.cache_dir) and the nodes' keys. \throw what ArtefactCache throws
+  void open_cache(std::vector<std::string> keys) {
+    cache_ = std::make_unique<ArtefactCache>(opt_.cache_dir);
+    keys_ = std::move(keys);
   }
-  std::vector<Artefact> outputs(nodes_.size());
-  std::vector<std::string> identity(nodes_.size());  // per node what its dependants' keys name it by
-  // Per computed node the rotation input -> the frame its output is in (NodeSpec::frame_role); none =
-  // the input's frame. Only --save-all uses it (it computes every node, so no cache hit hides one).
-  std::vector<std::optional<Eigen::Matrix3d>> frame(nodes_.size());
-  std::mutex event_mutex;
-  auto event = [&](const std::string& e, const ResolvedNode& n, double v, const std::string& what) {
-    if (!opt.on_event) return;
-    std::lock_guard<std::mutex> lock(event_mutex);
-    opt.on_event(e, n.id, n.spec->type, v, what);
-  };
 
-  auto body = [&](size_t i) {
+  /// Runs node i, or loads it from the cache, or skips it; records what happened.
+  /// \throw NodeError naming the node when it fails (a node of a branch drops its branch instead)
+  void run(size_t i) {
     const ResolvedNode& n = nodes_[i];
-    NodeRecord& rec = result.nodes[i];
-    NodeContext ctx;
-    ctx.id = n.id;
-    ctx.type = n.spec->type;
-    ctx.out_dir = opt.out_dir;
-    ctx.save_all = opt.save_all;
-    ctx.on_progress = [&](double f, const std::string& what) { event("progress", n, f, what); };
+    NodeRecord& rec = result_.nodes[i];
     Inputs in;
-    for (int u : n.input_nodes) in.items.push_back(u >= 0 ? outputs[u] : Artefact{});
-    // A required input from a node that produced nothing (a may_skip node's empty result, or a node
-    // skipped for that reason): this node is skipped too.
-    for (size_t k = 0; k < n.input_nodes.size(); ++k)
-      if (n.input_nodes[k] >= 0 && !in.items[k] && !n.spec->inputs[k].optional) {
-        rec.skipped = true;
-        event("skipped", n, 0, "");
-        return;
-      }
-    auto t0 = std::chrono::steady_clock::now();
-    // The key: each input by its content where known, else by its own key (graph/cache.h); none when an
-    // input has neither (it cannot be cached) or a file the node reads cannot be read (keys[i] empty).
-    std::string key;
-    if (cache && !keys[i].empty()) {
-      std::vector<std::string> in_ids;
-      bool known = true;
-      for (int u : n.input_nodes) {
-        in_ids.push_back(u >= 0 ? identity[size_t(u)] : std::string());
-        known = known && (u < 0 || !identity[size_t(u)].empty());
-      }
-      if (known) key = n.input_nodes.empty() ? keys[i] : node_key(*n.spec, n.params, in_ids);
+    for (int u : n.input_nodes) in.items.push_back(u >= 0 ? outputs_[size_t(u)] : Artefact{});
+    if (lacks_required_input(n, in)) {
+      rec.skipped = true;
+      event("skipped", n, 0, "");
+      return;
     }
+    const Clock::time_point t0 = Clock::now();
+    const std::string key = key_of(i);
     rec.cache_key = key;
-    if (!key.empty()) identity[i] = "k:" + key;  // replaced by the content digest below when there is one
+    if (!key.empty()) identity_[i] = "k:" + key;  // replaced by the content digest below when there is one
     // The cache: sinks always run; outputs without a codec are not cached.
-    const bool cacheable = cache && !key.empty() && !n.spec->output.empty() &&
+    const bool cacheable = cache_ && !key.empty() && !n.spec->output.empty() &&
                            Registry::instance().codec(n.spec->output) != nullptr;
     std::vector<std::string> cache_warnings;
-    if (cacheable && !writes_side_files(n, opt.save_all)) {
-      CacheLookup hit = cache->load(n.spec->type, key, n.spec->output);
-      if (hit.status == CacheLookup::Status::hit) {
-        outputs[i] = std::move(hit.artefact);
-        identity[i] = "d:" + hit.digest;
-        rec.cache_hit = true;
-        rec.ran = true;
-        rec.metrics = std::move(hit.metrics);
-        rec.warnings = std::move(hit.warnings);
-        rec.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        event("cached", n, rec.seconds, "");
-        return;
-      }
-      if (hit.status == CacheLookup::Status::invalid)
-        cache_warnings.push_back("cache: ignored entry " + hit.problem + "; recomputed");
-    }
-    for (int u : n.input_nodes)
-      if (u >= 0 && frame[size_t(u)] && !ctx.input_frame) ctx.input_frame = frame[size_t(u)];
-    // The node produced nothing (a may_skip node's empty result, or `error` from a node of a branch):
-    // its dependants are skipped.
-    auto produced_nothing = [&](std::string error) {
-      rec.skipped = true;
-      rec.branch_error = std::move(error);
-      rec.metrics = ctx.metrics;
-      rec.warnings = ctx.warnings;
-      rec.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      event("done", n, rec.seconds, "");
-    };
-    event("start", n, 0, "");
-    try {
-      Artefact out = n.spec->run(n.params, in, ctx);
-      if (!out && n.spec->may_skip) return produced_nothing("");
-      if (!n.spec->output.empty() && (!out || out.type != n.spec->output))
-        throw Error("produced " + (out ? out.type : std::string("nothing")) + " instead of " + n.spec->output);
-      outputs[i] = out;
-      using Role = NodeSpec::FrameRole;
-      if (n.spec->frame_role == Role::enters) frame[i] = ctx.frame;
-      if (n.spec->frame_role == Role::keeps) frame[i] = ctx.input_frame;
-      if (opt.save_all && out) {
-        auto [ext, saver] = Registry::instance().saver(out.type);
-        Artefact shown = out;
-        if (saver && frame[i] && *frame[i] != Eigen::Matrix3d::Identity()) {  // written in the input's frame
-          const ArtefactTurner* turn = Registry::instance().turner(out.type);
-          if (!turn) throw Error("--save-all: no way to turn a " + out.type + " back into the input's frame");
-          shown = (*turn)(out, frame[i]->transpose());
-        }
-        if (saver) saver(shown, save_all_path(nodes_, n.id, ext, opt.out_dir));
-      }
-    } catch (const NodeError&) {
-      throw;
-    } catch (const std::exception& e) {
-      if (n.branch > 0 && !interrupted()) return produced_nothing(e.what());  // the branch is dropped; the others go on
-      rec.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      rec.metrics = ctx.metrics;
-      rec.warnings = ctx.warnings;
-      throw NodeError(n.id, n.spec->type, e.what());
-    } catch (...) {
-      throw NodeError(n.id, n.spec->type, "unknown exception");
-    }
-    rec.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (cacheable && !writes_side_files(n, opt_.save_all) && load_cached(i, key, t0, cache_warnings)) return;
+    NodeContext ctx = context_of(i);
+    if (!compute(i, in, ctx, t0)) return;
+    rec.seconds = seconds_since(t0);
     if (cacheable) {
       try {
-        identity[i] = "d:" + cache->store(n.spec->type, key, outputs[i], ctx.metrics, ctx.warnings);
+        identity_[i] = "d:" + cache_->store(n.spec->type, key, outputs_[i], ctx.metrics, ctx.warnings);
       } catch (const std::exception& e) {
         cache_warnings.push_back(std::string("cache: could not store the result: ") + e.what());
       }
@@ -317,27 +238,154 @@ RunResult Pipeline::run(const RunOptions& opt) const {
     rec.warnings = std::move(ctx.warnings);
     rec.warnings.insert(rec.warnings.end(), cache_warnings.begin(), cache_warnings.end());
     event("done", n, rec.seconds, "");
-  };
-
-  for (size_t i = 0; i < nodes_.size(); ++i) {
-    result.nodes[i].id = nodes_[i].id;
-    result.nodes[i].type = nodes_[i].spec->type;
   }
 
-  int threads = opt.threads > 0 ? opt.threads : oneapi::tbb::info::default_concurrency();
+ private:
+  void event(const std::string& e, const ResolvedNode& n, double v, const std::string& what) {
+    if (!opt_.on_event) return;
+    std::lock_guard<std::mutex> lock(event_mutex_);
+    opt_.on_event(e, n.id, n.spec->type, v, what);
+  }
+
+  /// A required input from a node that produced nothing (a may_skip node's empty result, or a node
+  /// skipped for that reason): the node is skipped too.
+  static bool lacks_required_input(const ResolvedNode& n, const Inputs& in) {
+    for (size_t k = 0; k < n.input_nodes.size(); ++k)
+      if (n.input_nodes[k] >= 0 && !in.items[k] && !n.spec->inputs[k].optional) return true;
+    return false;
+  }
+
+  /// The key: each input by its content where known, else by its own key (graph/cache.h); none when an
+  /// input has neither (it cannot be cached) or a file the node reads cannot be read (keys_[i] empty).
+  std::string key_of(size_t i) const {
+    const ResolvedNode& n = nodes_[i];
+    if (!cache_ || keys_[i].empty()) return {};
+    std::vector<std::string> in_ids;
+    for (int u : n.input_nodes) {
+      if (u >= 0 && identity_[size_t(u)].empty()) return {};
+      in_ids.push_back(u >= 0 ? identity_[size_t(u)] : std::string());
+    }
+    return n.input_nodes.empty() ? keys_[i] : node_key(*n.spec, n.params, in_ids);
+  }
+
+  /// Loads node i from the cache; false when it is not there (an invalid entry adds a warning).
+  bool load_cached(size_t i, const std::string& key, Clock::time_point t0, std::vector<std::string>& warnings) {
+    const ResolvedNode& n = nodes_[i];
+    CacheLookup hit = cache_->load(n.spec->type, key, n.spec->output);
+    if (hit.status == CacheLookup::Status::invalid) warnings.push_back("cache: ignored entry " + hit.problem + "; recomputed");
+    if (hit.status != CacheLookup::Status::hit) return false;
+    NodeRecord& rec = result_.nodes[i];
+    outputs_[i] = std::move(hit.artefact);
+    identity_[i] = "d:" + hit.digest;
+    rec.cache_hit = true;
+    rec.ran = true;
+    rec.metrics = std::move(hit.metrics);
+    rec.warnings = std::move(hit.warnings);
+    rec.seconds = seconds_since(t0);
+    event("cached", n, rec.seconds, "");
+    return true;
+  }
+
+  NodeContext context_of(size_t i) {
+    const ResolvedNode& n = nodes_[i];
+    NodeContext ctx;
+    ctx.id = n.id;
+    ctx.type = n.spec->type;
+    ctx.out_dir = opt_.out_dir;
+    ctx.save_all = opt_.save_all;
+    ctx.on_progress = [this, &n](double f, const std::string& what) { event("progress", n, f, what); };
+    for (int u : n.input_nodes)
+      if (u >= 0 && frame_[size_t(u)] && !ctx.input_frame) ctx.input_frame = frame_[size_t(u)];
+    return ctx;
+  }
+
+  /// Computes node i (and writes its --save-all file); false when it produced nothing, recorded: a
+  /// may_skip node's empty result, or a node of a branch that threw (the branch is dropped, the others
+  /// go on). \throw NodeError naming the node for any other failure
+  bool compute(size_t i, const Inputs& in, NodeContext& ctx, Clock::time_point t0) {
+    const ResolvedNode& n = nodes_[i];
+    event("start", n, 0, "");
+    try {
+      Artefact out = n.spec->run(n.params, in, ctx);
+      if (!out && n.spec->may_skip) return produced_nothing(i, ctx, t0, "");
+      if (!n.spec->output.empty() && (!out || out.type != n.spec->output))
+        throw Error("produced " + (out ? out.type : std::string("nothing")) + " instead of " + n.spec->output);
+      outputs_[i] = out;
+      using Role = NodeSpec::FrameRole;
+      if (n.spec->frame_role == Role::enters) frame_[i] = ctx.frame;
+      if (n.spec->frame_role == Role::keeps) frame_[i] = ctx.input_frame;
+      if (opt_.save_all && out) save(i, out);
+    } catch (const NodeError&) {
+      throw;
+    } catch (const std::exception& e) {
+      if (n.branch > 0 && !interrupted()) return produced_nothing(i, ctx, t0, e.what());
+      NodeRecord& rec = result_.nodes[i];
+      rec.seconds = seconds_since(t0);
+      rec.metrics = ctx.metrics;
+      rec.warnings = ctx.warnings;
+      throw NodeError(n.id, n.spec->type, e.what());
+    } catch (...) {
+      throw NodeError(n.id, n.spec->type, "unknown exception");
+    }
+    return true;
+  }
+
+  /// Records that node i produced nothing (`error`: why, for a failed node of a branch); its dependants
+  /// are skipped. Returns false.
+  bool produced_nothing(size_t i, const NodeContext& ctx, Clock::time_point t0, std::string error) {
+    NodeRecord& rec = result_.nodes[i];
+    rec.skipped = true;
+    rec.branch_error = std::move(error);
+    rec.metrics = ctx.metrics;
+    rec.warnings = ctx.warnings;
+    rec.seconds = seconds_since(t0);
+    event("done", nodes_[i], rec.seconds, "");
+    return false;
+  }
+
+  /// --save-all: writes node i's artefact, in the input's frame. \throw Error when it cannot be turned back
+  void save(size_t i, const Artefact& out) {
+    auto [ext, saver] = Registry::instance().saver(out.type);
+    if (!saver) return;
+    Artefact shown = out;
+    if (frame_[i] && *frame_[i] != Eigen::Matrix3d::Identity()) {
+      const ArtefactTurner* turn = Registry::instance().turner(out.type);
+      if (!turn) throw Error("--save-all: no way to turn a " + out.type + " back into the input's frame");
+      shown = (*turn)(out, frame_[i]->transpose());
+    }
+    saver(shown, save_all_path(nodes_, nodes_[i].id, ext, opt_.out_dir));
+  }
+
+  const std::vector<ResolvedNode>& nodes_;
+  const RunOptions& opt_;
+  RunResult& result_;
+  std::unique_ptr<ArtefactCache> cache_;
+  std::vector<Artefact> outputs_;
+  std::vector<std::string> identity_;  // per node what its dependants' keys name it by
+  std::vector<std::string> keys_;
+  // Per computed node the rotation input -> the frame its output is in (NodeSpec::frame_role); none =
+  // the input's frame. Only --save-all uses it (it computes every node, so no cache hit hides one).
+  std::vector<std::optional<Eigen::Matrix3d>> frame_;
+  std::mutex event_mutex_;
+};
+
+/// Runs body(i) for every node as a tbb::flow::continue_node wired along the inputs, on `threads`
+/// threads; an exception ends the graph and its message is returned ("" when none).
+std::string run_flow_graph(const std::vector<ResolvedNode>& nodes, int threads, const std::function<void(size_t)>& body) {
+  namespace flow = oneapi::tbb::flow;
+  std::string error;
   oneapi::tbb::global_control limit(oneapi::tbb::global_control::max_allowed_parallelism, size_t(threads));
-  auto t0 = std::chrono::steady_clock::now();
   oneapi::tbb::task_arena arena(threads);
   arena.execute([&] {
     flow::graph g;
     flow::broadcast_node<flow::continue_msg> start(g);
     std::vector<std::unique_ptr<flow::continue_node<flow::continue_msg>>> fnodes;
-    for (size_t i = 0; i < nodes_.size(); ++i)
+    for (size_t i = 0; i < nodes.size(); ++i)
       fnodes.push_back(std::make_unique<flow::continue_node<flow::continue_msg>>(
           g, [&, i](const flow::continue_msg&) { body(i); }));
-    for (size_t i = 0; i < nodes_.size(); ++i) {
+    for (size_t i = 0; i < nodes.size(); ++i) {
       bool has_pred = false;
-      for (int u : nodes_[i].input_nodes)
+      for (int u : nodes[i].input_nodes)
         if (u >= 0) {
           flow::make_edge(*fnodes[u], *fnodes[i]);
           has_pred = true;
@@ -348,11 +396,32 @@ RunResult Pipeline::run(const RunOptions& opt) const {
       start.try_put(flow::continue_msg());
       g.wait_for_all();
     } catch (const std::exception& e) {
-      result.error = e.what();
+      error = e.what();
     }
   });
+  return error;
+}
+
+}  // namespace
+
+RunResult Pipeline::run(const RunOptions& opt) const {
+  std::error_code ec;
+  std::filesystem::create_directories(opt.out_dir, ec);
+  if (ec || !std::filesystem::is_directory(opt.out_dir))
+    throw IOError(opt.out_dir.string() + ": cannot create output folder" + (ec ? ": " + ec.message() : ""));
+  RunResult result;
+  result.nodes.resize(nodes_.size());
+  for (size_t i = 0; i < nodes_.size(); ++i) {
+    result.nodes[i].id = nodes_[i].id;
+    result.nodes[i].type = nodes_[i].spec->type;
+  }
+  NodeRunner runner(nodes_, opt, result);
+  if (!opt.cache_dir.empty()) runner.open_cache(cache_keys());
+  const int threads = opt.threads > 0 ? opt.threads : oneapi::tbb::info::default_concurrency();
+  const auto t0 = Clock::now();
+  result.error = run_flow_graph(nodes_, threads, [&](size_t i) { runner.run(i); });
   result.interrupted = interrupted();
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  result.seconds = seconds_since(t0);
   return result;
 }
 
