@@ -73,15 +73,30 @@ double conformal_distortion(const Eigen::Vector3d& a, const Eigen::Vector3d& b, 
   return J.norm() * J.inverse().norm() / 3.0;
 }
 
-PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetMesh& deformed,
-                            std::shared_ptr<const PolyCubeSegmentation> seg_ptr, const PositionDeformParams& p,
-                            PositionDeformStats* stats_out, const ProgressFn& progress) {
-  // The phases' shares of the bar: their times on the built-in shapes (the solves ~1/3, the untangling ~2/3).
-  auto report = [&](double fraction, const char* what) {
-    if (progress) progress(fraction, what);
-  };
-  const TetMesh& input = *input_ptr;
-  const PolyCubeSegmentation& seg = *seg_ptr;
+namespace {
+
+/// The inputs and sizes every axis of the solve shares.
+struct AxisInputs {
+  const TetMesh& input;
+  const RowMatrixX3d& Vd;  ///< the deformed mesh (rotation stage)
+  const PolyCubeSegmentation& seg;
+  const PositionDeformParams& p;
+  const TetEdgeGraph& graph;
+  std::vector<std::vector<int>> vcharts;          ///< per vertex its charts (boundary vertices only have any)
+  std::vector<int> chart_label;                   ///< per chart its label
+  std::vector<std::vector<int>> chart_neighbours; ///< per chart its neighbours
+  std::vector<char> on_boundary;                  ///< per vertex: on the segmented surface
+  /// Mean value weights on the deformed mesh (final_solve "mvc_laplace"): surface (2D) weights of the
+  /// boundary vertices, volume (3D) weights of the others.
+  std::vector<std::map<int, double>> surf_w;
+  std::vector<std::vector<std::pair<int, double>>> vol_w;
+  double diag = 0, h = 0, min_d = 0, sigma = 0;
+};
+
+/// \throw InvalidInput for a deformed mesh of other connectivity or a malformed segmentation,
+///        ConfigError for an unknown mode
+void check_inputs(const TetMesh& input, const TetMesh& deformed, const PolyCubeSegmentation& seg,
+                  const PositionDeformParams& p) {
   const int nV = int(input.V.rows());
   if (deformed.V.rows() != nV || deformed.T.rows() != input.T.rows())
     throw InvalidInput(input.source + ": the deformed mesh has " + std::to_string(deformed.V.rows()) +
@@ -99,308 +114,331 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
     for (int k = 0; k < 3; ++k)
       if (seg.F(f, k) < 0 || seg.F(f, k) >= nV) throw InvalidInput(input.source + ": segmentation triangle index out of range");
   }
-  PositionDeformStats st;
-  st.charts = nC;
-  const RowMatrixX3d& Vd = deformed.V;
-  const double diag = reference_length(input.V);
-  const double h = p.edge_length * diag;
-  const double min_d = 2.0 * h, sigma = 3.0 * min_d;
-  {
-    // Refuse a hex edge length the machine cannot afford before any work: the lattice gives about
-    // volume / h³ hexes.
-    double volume = 0;
-    for (Eigen::Index t = 0; t < input.T.rows(); ++t) {
-      const Eigen::Vector3d a = input.V.row(input.T(t, 0)), b = input.V.row(input.T(t, 1)),
-                            c = input.V.row(input.T(t, 2)), d = input.V.row(input.T(t, 3));
-      volume += std::abs((b - a).cross(c - a).dot(d - a)) / 6.0;
-    }
-    const double estimate = volume / (h * h * h);
-    if (estimate > p.max_hexes) {
-      char msg[320];
-      std::snprintf(msg, sizeof msg,
-                    ": refused: edge_length %g would give about %.3g hexes (volume / h^3), more than max_hexes = %.3g; "
-                    "use edge_length >= %.3g or raise max_hexes",
-                    p.edge_length, estimate, p.max_hexes, p.edge_length * std::cbrt(estimate / p.max_hexes));
-      throw InvalidInput(input.source + msg);
-    }
+}
+
+/// Refuses a hex edge length the machine cannot afford before any work: the lattice gives about
+/// volume / h³ hexes. \throw InvalidInput above p.max_hexes
+void check_budget(const TetMesh& input, const PositionDeformParams& p, double h) {
+  double volume = 0;
+  for (Eigen::Index t = 0; t < input.T.rows(); ++t) {
+    const Eigen::Vector3d a = input.V.row(input.T(t, 0)), b = input.V.row(input.T(t, 1)),
+                          c = input.V.row(input.T(t, 2)), d = input.V.row(input.T(t, 3));
+    volume += std::abs((b - a).cross(c - a).dot(d - a)) / 6.0;
   }
+  const double estimate = volume / (h * h * h);
+  if (estimate > p.max_hexes) {
+    char msg[320];
+    std::snprintf(msg, sizeof msg,
+                  ": refused: edge_length %g would give about %.3g hexes (volume / h^3), more than max_hexes = %.3g; "
+                  "use edge_length >= %.3g or raise max_hexes",
+                  p.edge_length, estimate, p.max_hexes, p.edge_length * std::cbrt(estimate / p.max_hexes));
+    throw InvalidInput(input.source + msg);
+  }
+}
 
-  const TetEdgeGraph graph(input.T, nV);
-  const auto& edges = graph.edges;
-
-  // Charts of every vertex (boundary vertices only have any).
-  std::vector<std::vector<int>> vcharts(nV);
+/// The charts of every vertex, their labels and neighbours, and the boundary vertices.
+void chart_incidence(AxisInputs& in) {
+  const PolyCubeSegmentation& seg = in.seg;
+  const int nV = int(in.input.V.rows()), nC = int(seg.charts.size());
+  in.vcharts.assign(size_t(nV), {});
   for (Eigen::Index f = 0; f < seg.F.rows(); ++f)
     for (int k = 0; k < 3; ++k) {
-      auto& v = vcharts[seg.F(f, k)];
+      auto& v = in.vcharts[seg.F(f, k)];
       int c = seg.chart[f];
       if (std::find(v.begin(), v.end(), c) == v.end()) v.push_back(c);
     }
-  std::vector<int> chart_label(nC);
-  std::vector<std::vector<int>> chart_neighbours(nC);
-  for (int c = 0; c < nC; ++c) chart_label[c] = seg.charts[c].label, chart_neighbours[c] = seg.charts[c].neighbours;
-  std::vector<int> chart_vertices(nC, 0);
-  for (int v = 0; v < nV; ++v)
-    for (int c : vcharts[v]) ++chart_vertices[c];
-
-  PolyCubeMap out;
-  out.input = input_ptr;
-  out.segmentation = seg_ptr;
-  out.edge_length = h;
-  out.U.resize(nV, 3);
-  out.chart_plane = Eigen::VectorXi::Zero(nC);
-
-  // Surface MVC weights (2D, per incident triangle: tan(angle/2) / length), on the deformed surface.
-  std::vector<std::map<int, double>> surf_w;
-  if (p.final_solve == "mvc_laplace") {
-    surf_w.resize(nV);
-    for (Eigen::Index f = 0; f < seg.F.rows(); ++f)
-      for (int k = 0; k < 3; ++k) {
-        int i = seg.F(f, k), j = seg.F(f, (k + 1) % 3), l = seg.F(f, (k + 2) % 3);
-        Eigen::Vector3d a = Vd.row(j) - Vd.row(i), b = Vd.row(l) - Vd.row(i);
-        double la = a.norm(), lb = b.norm();
-        if (la < 1e-300 || lb < 1e-300) continue;
-        double ang = std::acos(std::clamp(a.dot(b) / (la * lb), -1.0, 1.0));
-        double t = std::tan(ang / 2.0);
-        surf_w[i][j] += t / la;
-        surf_w[i][l] += t / lb;
-      }
-  }
-  std::vector<char> on_boundary(nV, 0);
+  in.chart_label.resize(size_t(nC));
+  in.chart_neighbours.resize(size_t(nC));
+  for (int c = 0; c < nC; ++c) in.chart_label[c] = seg.charts[c].label, in.chart_neighbours[c] = seg.charts[c].neighbours;
+  in.on_boundary.assign(size_t(nV), 0);
   for (Eigen::Index f = 0; f < seg.F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) on_boundary[seg.F(f, k)] = 1;
+    for (int k = 0; k < 3; ++k) in.on_boundary[seg.F(f, k)] = 1;
+}
 
-  // Volume MVC weights (3D) of interior vertices, on the deformed mesh: rows of (i, j, w).
-  std::vector<std::vector<std::pair<int, double>>> vol_w;
-  if (p.final_solve == "mvc_laplace") {
-    std::vector<std::vector<int>> vt(nV);
-    for (Eigen::Index t = 0; t < input.T.rows(); ++t)
-      for (int k = 0; k < 4; ++k) vt[input.T(t, k)].push_back(int(t));
-    vol_w.resize(nV);
-    static const int opp[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-    oneapi::tbb::parallel_for(0, nV, [&](int i) {
-      if (on_boundary[i]) return;
-      std::map<int, double> w;
-      Eigen::Vector3d x = Vd.row(i).transpose();
-      for (int t : vt[i]) {
-        int k = 0;
-        while (input.T(t, k) != i) ++k;
-        Eigen::Vector3d P[3];
-        int id[3];
-        for (int m = 0; m < 3; ++m) {
-          id[m] = input.T(t, opp[k][m]);
-          P[m] = Vd.row(id[m]).transpose();
-        }
-        double ww[3] = {0, 0, 0};
-        mvc_triangle(x, P, ww);
-        for (int m = 0; m < 3; ++m) w[id[m]] += ww[m];
+/// The mean value weights of the final solve "mvc_laplace", on the deformed mesh: per boundary vertex
+/// the 2D weights of its triangles (tan(angle/2) / length), per interior vertex the 3D weights of its
+/// star (mvc_triangle).
+void mvc_weights(AxisInputs& in) {
+  const PolyCubeSegmentation& seg = in.seg;
+  const TetMesh& input = in.input;
+  const RowMatrixX3d& Vd = in.Vd;
+  const int nV = int(input.V.rows());
+  in.surf_w.resize(size_t(nV));
+  for (Eigen::Index f = 0; f < seg.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      int i = seg.F(f, k), j = seg.F(f, (k + 1) % 3), l = seg.F(f, (k + 2) % 3);
+      Eigen::Vector3d a = Vd.row(j) - Vd.row(i), b = Vd.row(l) - Vd.row(i);
+      double la = a.norm(), lb = b.norm();
+      if (la < 1e-300 || lb < 1e-300) continue;
+      double ang = std::acos(std::clamp(a.dot(b) / (la * lb), -1.0, 1.0));
+      double t = std::tan(ang / 2.0);
+      in.surf_w[i][j] += t / la;
+      in.surf_w[i][l] += t / lb;
+    }
+  std::vector<std::vector<int>> vt(nV);
+  for (Eigen::Index t = 0; t < input.T.rows(); ++t)
+    for (int k = 0; k < 4; ++k) vt[input.T(t, k)].push_back(int(t));
+  in.vol_w.resize(size_t(nV));
+  static const int opp[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  oneapi::tbb::parallel_for(0, nV, [&](int i) {
+    if (in.on_boundary[i]) return;
+    std::map<int, double> w;
+    Eigen::Vector3d x = Vd.row(i).transpose();
+    for (int t : vt[i]) {
+      int k = 0;
+      while (input.T(t, k) != i) ++k;
+      Eigen::Vector3d P[3];
+      int id[3];
+      for (int m = 0; m < 3; ++m) {
+        id[m] = input.T(t, opp[k][m]);
+        P[m] = Vd.row(id[m]).transpose();
       }
-      vol_w[i].assign(w.begin(), w.end());
-    });
+      double ww[3] = {0, 0, 0};
+      mvc_triangle(x, P, ww);
+      for (int m = 0; m < 3; ++m) w[id[m]] += ww[m];
+    }
+    in.vol_w[i].assign(w.begin(), w.end());
+  });
+}
+
+struct DistancePair {
+  int p, q;
+  double delta, w;
+};
+
+/// The distance-preservation constraints of §5.2 (step 2 of the header) from the order evidence.
+std::vector<DistancePair> distance_pairs(const AxisChartOrder& order, const AxisInputs& in) {
+  std::vector<DistancePair> dpairs;
+  for (auto& s : order.distance_samples) {
+    double excess = std::max(std::abs(s.delta) - in.min_d, 0.0);
+    double w = in.p.distance_weight * std::min(order.group_size[s.p], order.group_size[s.q]) *
+               std::exp(-excess * excess / (in.sigma * in.sigma));
+    if (w > 0) dpairs.push_back({s.p, s.q, s.delta, w});
   }
+  return dpairs;
+}
 
-  // The three axes are independent (their own charts, Voronoi partition, Poisson and final systems):
-  // solved in parallel (paper design: parallel per-component coordinate solves), each into its own
-  // statistics, merged below in axis order.
-  std::array<PositionDeformStats, 3> axis_stats{};
-  auto solve_axis = [&](int a) {
-    PositionDeformStats& st = axis_stats[size_t(a)];
-    throw_if_interrupted();  // safe point: per axis
-    // The order evidence of the a-charts (chart_order.h): groups of same-axis charts sharing a vertex
-    // (one plane each), the Voronoi distance samples and the ordered pairs.
-    std::vector<int> axis_charts;
-    for (int c = 0; c < nC; ++c)
-      if (label_axis(seg.charts[c].label) == a) axis_charts.push_back(c);
-    if (axis_charts.empty())
-      throw InvalidInput(input.source + ": the PolyCube structure has no chart on axis " + std::string(1, char('X' + a)));
-    AxisChartOrder order = chart_order_evidence(Vd, graph, vcharts, chart_label, chart_neighbours, a, h);
-    st.merged_same_axis_charts += order.merged_same_axis_charts;
-    const int nG = order.groups;
-    const std::vector<int>& chart_group = order.chart_group;
-    const std::vector<int>& vgroup = order.vertex_group;
-    const std::vector<int>& group_size = order.group_size;
-    const std::vector<double>& group_mean = order.group_mean;
-    const std::vector<OrderedPair>& ordered = order.ordered;
-    struct DistancePair {
-      int p, q;
-      double delta, w;
-    };
-    std::vector<DistancePair> dpairs;
-    for (auto& s : order.distance_samples) {
-      double excess = std::max(std::abs(s.delta) - min_d, 0.0);
-      double w = p.distance_weight * std::min(group_size[s.p], group_size[s.q]) * std::exp(-excess * excess / (sigma * sigma));
-      if (w > 0) dpairs.push_back({s.p, s.q, s.delta, w});
-    }
-    st.distance_pairs += int(dpairs.size());
-    st.ordered_pairs += int(ordered.size());
+/// The Poisson step of one axis (step 1): unknowns = the free vertices, then the chart groups.
+struct PoissonStep {
+  std::vector<int> var;  ///< per vertex its unknown
+  int nFree = 0;         ///< free vertices (the first unknowns)
+  Eigen::SparseMatrix<double> A;
+  Eigen::VectorXd rhs, y;  ///< the system's right-hand side and solution
+};
 
-    // Poisson step: unknowns = free vertices, then groups.
-    auto t0 = Clock::now();
-    std::vector<int> var(nV);
-    int nFree = 0;
-    for (int v = 0; v < nV; ++v) var[v] = vgroup[v] < 0 ? nFree++ : -1;
-    for (int v = 0; v < nV; ++v)
-      if (vgroup[v] >= 0) var[v] = nFree + vgroup[v];
-    const int n = nFree + nG;
-    std::vector<Eigen::Triplet<double>> trip;
-    trip.reserve(edges.size() * 3 + dpairs.size() * 3 + n);
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
-    auto add_term = [&](int x, int y, double w, double target) {  // w ((y_y - y_x) - target)^2
-      trip.emplace_back(x, x, w);
-      trip.emplace_back(y, y, w);
-      trip.emplace_back(std::max(x, y), std::min(x, y), -w);
-      rhs[x] -= w * target;
-      rhs[y] += w * target;
-    };
-    for (auto& [i, j] : edges)
-      if (var[i] != var[j]) add_term(var[i], var[j], 1.0, Vd(j, a) - Vd(i, a));
-    for (auto& d : dpairs) add_term(nFree + d.p, nFree + d.q, d.w, d.delta);
-    // Tiny pull towards the deformed coordinates removes the translation null space.
-    const double eps = 1e-8;
-    for (int v = 0; v < nV; ++v)
-      if (vgroup[v] < 0) trip.emplace_back(var[v], var[v], eps), rhs[var[v]] += eps * Vd(v, a);
-    for (int g = 0; g < nG; ++g) trip.emplace_back(nFree + g, nFree + g, eps * group_size[g]), rhs[nFree + g] += eps * group_size[g] * group_mean[g];
-    Eigen::SparseMatrix<double> A(n, n);
-    A.setFromTriplets(trip.begin(), trip.end());
-    throw_if_interrupted();
-    CholmodFactorization chol(A);
-    Eigen::VectorXd y = chol.solve(rhs);
-    st.seconds_poisson += since(t0);
-
-    // Rounding to the lattice, keeping ordered pairs apart (§5.2).
-    std::vector<double> c(nG);
-    std::vector<long> k(nG);
-    for (int g = 0; g < nG; ++g) c[g] = y[nFree + g], k[g] = std::lround(c[g] / h);
-    for (auto& o : ordered)
-      if (o.sign * (c[o.q] - c[o.p]) <= 0) ++st.flipped_chart_orders;
-    // The ordered pairs as a graph "lower -> upper". Pairs are taken by decreasing evidence and one that
-    // would close a cycle (contradicting stronger evidence) is dropped; then the levels: the balanced
-    // placement (chart_order.h), or every chart pushed up to at least one h above each chart below it, in
-    // topological order (longest path from the rounded values). The per-pair nudging before both could
-    // undo itself on conflicting pairs and leave orders swapped.
-    {
-      const OrderAcceptance acc = accept_orders(ordered, nG);
-      st.order_constraints_dropped += int(acc.dropped.size());
-      if (p.level_placement == "balanced") {
-        std::vector<double> target(nG), weight(nG);
-        for (int g = 0; g < nG; ++g) target[g] = c[g] / h, weight[g] = double(group_size[g]);
-        k = place_levels(acc, target, weight);
-      } else {
-        push_levels(acc, k);
-      }
-    }
-    for (auto& o : ordered)
-      if (o.sign * (k[o.q] - k[o.p]) < 1) ++st.flipped_after_rounding;
-    for (int g = 0; g < nG; ++g)
-      st.chart_coordinates_rounded_max_shift = std::max(st.chart_coordinates_rounded_max_shift, std::abs(c[g] - k[g] * h) / h);
-    for (int ch : axis_charts) out.chart_plane[ch] = int(k[chart_group[ch]]);
-
-    // Final solve with the chart planes pinned.
-    throw_if_interrupted();
-    t0 = Clock::now();
-    Eigen::VectorXd u(nV);
-    for (int v = 0; v < nV; ++v)
-      if (vgroup[v] >= 0) u[v] = k[vgroup[v]] * h;
-    if (nFree > 0) {
-      if (p.final_solve == "poisson") {
-        // The same energy restricted to the free unknowns: the upper-left block of A, with the pinned
-        // groups moved to the right-hand side.
-        std::vector<Eigen::Triplet<double>> tf;
-        Eigen::VectorXd b = rhs.head(nFree);
-        for (int col = 0; col < A.outerSize(); ++col)
-          for (Eigen::SparseMatrix<double>::InnerIterator it(A, col); it; ++it) {
-            int r = int(it.row()), cc = int(it.col());
-            if (r < nFree && cc < nFree) tf.emplace_back(r, cc, it.value());
-            else if (r >= nFree && cc < nFree) b[cc] -= it.value() * k[r - nFree] * h;
-            else if (cc >= nFree && r < nFree) b[r] -= it.value() * k[cc - nFree] * h;
-          }
-        Eigen::SparseMatrix<double> Af(nFree, nFree);
-        Af.setFromTriplets(tf.begin(), tf.end());
-        CholmodFactorization cf(Af);
-        Eigen::VectorXd yf = cf.solve(b);
-        for (int v = 0; v < nV; ++v)
-          if (vgroup[v] < 0) u[v] = yf[var[v]];
-      } else {
-        std::vector<Eigen::Triplet<double>> tf;
-        Eigen::VectorXd b = Eigen::VectorXd::Zero(nFree);
-        for (int v = 0; v < nV; ++v) {
-          if (vgroup[v] >= 0) continue;
-          int r = var[v];
-          double sum = 0;
-          auto add = [&](int j, double w) {
-            sum += w;
-            if (vgroup[j] >= 0) b[r] += w * u[j];
-            else tf.emplace_back(r, var[j], -w);
-          };
-          if (on_boundary[v])
-            for (auto& [j, w] : surf_w[v]) add(j, w);
-          else
-            for (auto& [j, w] : vol_w[v]) add(j, w);
-          if (std::abs(sum) < 1e-300)
-            throw SolverError(input.source + ": vertex " + std::to_string(v) + " has zero mean value weights");
-          tf.emplace_back(r, r, sum);
-        }
-        Eigen::SparseMatrix<double> Af(nFree, nFree);
-        Af.setFromTriplets(tf.begin(), tf.end());
-        Af.makeCompressed();
-        // Non-symmetric (mean value weights are not symmetric): BiCGSTAB started from the Poisson step's
-        // solution, which is already close. With `final_jacobi_iterations` > 0, first with the diagonal
-        // preconditioner: no set-up cost. On the 200k benchmark it converges in 140-230 iterations, 0.2 s per
-        // axis, where the incomplete LU (drop tolerance 1e-4, fill 10) spent 1.0-1.2 s on its factorization
-        // alone for 8-10 iterations; over the 28 shared models the final solves take 35 s instead of 85 s (the
-        // hand's and fertility's axes need 800-950 iterations, 1.6x the incomplete LU's time). A system they
-        // do not solve gets the incomplete LU, from where they stopped. Not the default: both solve to a
-        // relative residual of 1e-12, yet the map's untangling (600 L-BFGS iterations, stopped before it
-        // converges) carries the last-bit differences into visibly different maps and meshes: over the 28
-        // shared models, inverted hexes on 5 models (dragon -0.354 on an interior hex, carter and casting
-        // -1e-4) against 2 with the incomplete LU. The downstream sensitivity is the problem to fix.
-        Eigen::SparseMatrix<double, Eigen::RowMajor> Ar = Af;
-        Eigen::VectorXd yf(nFree);
-        for (int v = 0; v < nV; ++v)
-          if (vgroup[v] < 0) yf[var[v]] = y[var[v]];
-        constexpr double tol = 1e-12;
-        bool done = false;
-        if (p.final_jacobi_iterations > 0) {
-          Eigen::BiCGSTAB<Eigen::SparseMatrix<double, Eigen::RowMajor>> jacobi;
-          jacobi.setTolerance(tol);
-          jacobi.setMaxIterations(p.final_jacobi_iterations);
-          jacobi.compute(Ar);
-          Eigen::VectorXd x = jacobi.solveWithGuess(b, yf);
-          st.final_iterations += int(jacobi.iterations());
-          if (x.allFinite()) {
-            yf = x;
-            done = jacobi.info() == Eigen::Success && jacobi.error() <= tol;
-          }
-        }
-        if (!done) {
-          ++st.final_ilu_axes;
-          Eigen::BiCGSTAB<Eigen::SparseMatrix<double, Eigen::RowMajor>, Eigen::IncompleteLUT<double>> solver;
-          solver.preconditioner().setDroptol(1e-4);
-          solver.preconditioner().setFillfactor(10);
-          solver.setTolerance(tol);
-          solver.setMaxIterations(2000);
-          solver.compute(Ar);
-          if (solver.info() != Eigen::Success)
-            throw SolverError(input.source + ": mean value Laplace system (axis " + std::string(1, char('X' + a)) +
-                              ") could not be preconditioned");
-          yf = solver.solveWithGuess(b, Eigen::VectorXd(yf));  // from where the diagonal one stopped
-          st.final_iterations += int(solver.iterations());
-          if (!yf.allFinite() || solver.error() > 1e-8)
-            throw SolverError(input.source + ": mean value Laplace solve did not converge on axis " +
-                              std::string(1, char('X' + a)) + " (relative residual " + std::to_string(solver.error()) + ")");
-        }
-        for (int v = 0; v < nV; ++v)
-          if (vgroup[v] < 0) u[v] = yf[var[v]];
-      }
-    }
-    out.U.col(a) = u;
-    st.seconds_final += since(t0);
-    // Planarity: exact by substitution; measured anyway.
-    for (int v = 0; v < nV; ++v)
-      if (vgroup[v] >= 0) st.planarity_error = std::max(st.planarity_error, std::abs(out.U(v, a) - k[vgroup[v]] * h) / diag);
+PoissonStep poisson_step(const AxisInputs& in, const AxisChartOrder& order, const std::vector<DistancePair>& dpairs, int a) {
+  const RowMatrixX3d& Vd = in.Vd;
+  const int nV = int(in.input.V.rows()), nG = order.groups;
+  const std::vector<int>& vgroup = order.vertex_group;
+  PoissonStep ps;
+  std::vector<int>& var = ps.var;
+  var.resize(size_t(nV));
+  int& nFree = ps.nFree;
+  for (int v = 0; v < nV; ++v) var[v] = vgroup[v] < 0 ? nFree++ : -1;
+  for (int v = 0; v < nV; ++v)
+    if (vgroup[v] >= 0) var[v] = nFree + vgroup[v];
+  const int n = nFree + nG;
+  std::vector<Eigen::Triplet<double>> trip;
+  trip.reserve(in.graph.edges.size() * 3 + dpairs.size() * 3 + n);
+  Eigen::VectorXd& rhs = ps.rhs;
+  rhs = Eigen::VectorXd::Zero(n);
+  auto add_term = [&](int x, int y, double w, double target) {  // w ((y_y - y_x) - target)^2
+    trip.emplace_back(x, x, w);
+    trip.emplace_back(y, y, w);
+    trip.emplace_back(std::max(x, y), std::min(x, y), -w);
+    rhs[x] -= w * target;
+    rhs[y] += w * target;
   };
-  report(0, "chart planes, Poisson and final solves");
-  oneapi::tbb::parallel_for(0, 3, solve_axis);
+  for (auto& [i, j] : in.graph.edges)
+    if (var[i] != var[j]) add_term(var[i], var[j], 1.0, Vd(j, a) - Vd(i, a));
+  for (auto& d : dpairs) add_term(nFree + d.p, nFree + d.q, d.w, d.delta);
+  // Tiny pull towards the deformed coordinates removes the translation null space.
+  const double eps = 1e-8;
+  for (int v = 0; v < nV; ++v)
+    if (vgroup[v] < 0) trip.emplace_back(var[v], var[v], eps), rhs[var[v]] += eps * Vd(v, a);
+  for (int g = 0; g < nG; ++g)
+    trip.emplace_back(nFree + g, nFree + g, eps * order.group_size[g]), rhs[nFree + g] += eps * order.group_size[g] * order.group_mean[g];
+  ps.A.resize(n, n);
+  ps.A.setFromTriplets(trip.begin(), trip.end());
+  throw_if_interrupted();
+  CholmodFactorization chol(ps.A);
+  ps.y = chol.solve(rhs);
+  return ps;
+}
+
+/// Rounding to the lattice, keeping ordered pairs apart (step 3, §5.2): the integer level of every chart
+/// group. The ordered pairs as a graph "lower -> upper": pairs are taken by decreasing evidence and one
+/// that would close a cycle (contradicting stronger evidence) is dropped; then the levels: the balanced
+/// placement (chart_order.h), or every chart pushed up to at least one h above each chart below it, in
+/// topological order (longest path from the rounded values). The per-pair nudging before both could
+/// undo itself on conflicting pairs and leave orders swapped.
+std::vector<long> chart_levels(const AxisChartOrder& order, const PoissonStep& ps, const AxisInputs& in, PositionDeformStats& st) {
+  const int nG = order.groups;
+  const double h = in.h;
+  std::vector<double> c(nG);
+  std::vector<long> k(nG);
+  for (int g = 0; g < nG; ++g) c[g] = ps.y[ps.nFree + g], k[g] = std::lround(c[g] / h);
+  for (auto& o : order.ordered)
+    if (o.sign * (c[o.q] - c[o.p]) <= 0) ++st.flipped_chart_orders;
+  const OrderAcceptance acc = accept_orders(order.ordered, nG);
+  st.order_constraints_dropped += int(acc.dropped.size());
+  if (in.p.level_placement == "balanced") {
+    std::vector<double> target(nG), weight(nG);
+    for (int g = 0; g < nG; ++g) target[g] = c[g] / h, weight[g] = double(order.group_size[g]);
+    k = place_levels(acc, target, weight);
+  } else {
+    push_levels(acc, k);
+  }
+  for (auto& o : order.ordered)
+    if (o.sign * (k[o.q] - k[o.p]) < 1) ++st.flipped_after_rounding;
+  for (int g = 0; g < nG; ++g)
+    st.chart_coordinates_rounded_max_shift = std::max(st.chart_coordinates_rounded_max_shift, std::abs(c[g] - k[g] * h) / h);
+  return k;
+}
+
+/// Final solve "poisson": step 1's energy restricted to the free unknowns (the upper-left block of A),
+/// with the pinned groups moved to the right-hand side. Writes the free vertices of u.
+void final_poisson(const PoissonStep& ps, const std::vector<long>& k, const AxisInputs& in,
+                   const std::vector<int>& vgroup, Eigen::VectorXd& u) {
+  const int nFree = ps.nFree, nV = int(u.size());
+  const double h = in.h;
+  std::vector<Eigen::Triplet<double>> tf;
+  Eigen::VectorXd b = ps.rhs.head(nFree);
+  for (int col = 0; col < ps.A.outerSize(); ++col)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(ps.A, col); it; ++it) {
+      int r = int(it.row()), cc = int(it.col());
+      if (r < nFree && cc < nFree) tf.emplace_back(r, cc, it.value());
+      else if (r >= nFree && cc < nFree) b[cc] -= it.value() * k[r - nFree] * h;
+      else if (cc >= nFree && r < nFree) b[r] -= it.value() * k[cc - nFree] * h;
+    }
+  Eigen::SparseMatrix<double> Af(nFree, nFree);
+  Af.setFromTriplets(tf.begin(), tf.end());
+  CholmodFactorization cf(Af);
+  Eigen::VectorXd yf = cf.solve(b);
+  for (int v = 0; v < nV; ++v)
+    if (vgroup[v] < 0) u[v] = yf[ps.var[v]];
+}
+
+/// Final solve "mvc_laplace" (the paper): the mean value Laplace equation with the chart planes pinned.
+/// It is not symmetric, so BiCGSTAB, started from the Poisson step's solution, which is already close;
+/// with `final_jacobi_iterations` > 0 first with the diagonal preconditioner (no set-up cost), then,
+/// where that does not converge, with the incomplete LU from where it stopped (the header's
+/// final_jacobi_iterations says why the diagonal one is not the default). Writes the free vertices of u.
+/// \throw SolverError for a vertex with zero weights, a system that cannot be preconditioned or a
+///        solve that does not converge
+void final_mvc(const PoissonStep& ps, const AxisInputs& in, const std::vector<int>& vgroup, int a, Eigen::VectorXd& u,
+               PositionDeformStats& st) {
+  const int nFree = ps.nFree, nV = int(u.size());
+  const std::vector<int>& var = ps.var;
+  std::vector<Eigen::Triplet<double>> tf;
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(nFree);
+  for (int v = 0; v < nV; ++v) {
+    if (vgroup[v] >= 0) continue;
+    int r = var[v];
+    double sum = 0;
+    auto add = [&](int j, double w) {
+      sum += w;
+      if (vgroup[j] >= 0) b[r] += w * u[j];
+      else tf.emplace_back(r, var[j], -w);
+    };
+    if (in.on_boundary[v])
+      for (auto& [j, w] : in.surf_w[v]) add(j, w);
+    else
+      for (auto& [j, w] : in.vol_w[v]) add(j, w);
+    if (std::abs(sum) < 1e-300)
+      throw SolverError(in.input.source + ": vertex " + std::to_string(v) + " has zero mean value weights");
+    tf.emplace_back(r, r, sum);
+  }
+  Eigen::SparseMatrix<double> Af(nFree, nFree);
+  Af.setFromTriplets(tf.begin(), tf.end());
+  Af.makeCompressed();
+  Eigen::SparseMatrix<double, Eigen::RowMajor> Ar = Af;
+  Eigen::VectorXd yf(nFree);
+  for (int v = 0; v < nV; ++v)
+    if (vgroup[v] < 0) yf[var[v]] = ps.y[var[v]];
+  constexpr double tol = 1e-12;
+  bool done = false;
+  if (in.p.final_jacobi_iterations > 0) {
+    Eigen::BiCGSTAB<Eigen::SparseMatrix<double, Eigen::RowMajor>> jacobi;
+    jacobi.setTolerance(tol);
+    jacobi.setMaxIterations(in.p.final_jacobi_iterations);
+    jacobi.compute(Ar);
+    Eigen::VectorXd x = jacobi.solveWithGuess(b, yf);
+    st.final_iterations += int(jacobi.iterations());
+    if (x.allFinite()) {
+      yf = x;
+      done = jacobi.info() == Eigen::Success && jacobi.error() <= tol;
+    }
+  }
+  if (!done) {
+    ++st.final_ilu_axes;
+    Eigen::BiCGSTAB<Eigen::SparseMatrix<double, Eigen::RowMajor>, Eigen::IncompleteLUT<double>> solver;
+    solver.preconditioner().setDroptol(1e-4);
+    solver.preconditioner().setFillfactor(10);
+    solver.setTolerance(tol);
+    solver.setMaxIterations(2000);
+    solver.compute(Ar);
+    if (solver.info() != Eigen::Success)
+      throw SolverError(in.input.source + ": mean value Laplace system (axis " + std::string(1, char('X' + a)) +
+                        ") could not be preconditioned");
+    yf = solver.solveWithGuess(b, Eigen::VectorXd(yf));  // from where the diagonal one stopped
+    st.final_iterations += int(solver.iterations());
+    if (!yf.allFinite() || solver.error() > 1e-8)
+      throw SolverError(in.input.source + ": mean value Laplace solve did not converge on axis " +
+                        std::string(1, char('X' + a)) + " (relative residual " + std::to_string(solver.error()) + ")");
+  }
+  for (int v = 0; v < nV; ++v)
+    if (vgroup[v] < 0) u[v] = yf[var[v]];
+}
+
+/// One axis a of §5.2 (steps 1-4 of the header): the a-coordinate of the map, out.U.col(a), and the
+/// planes of the a-charts, out.chart_plane. The three axes are independent (their own charts, Voronoi
+/// partition, Poisson and final systems) and run in parallel, each into its own statistics.
+void solve_axis(int a, const AxisInputs& in, PolyCubeMap& out, PositionDeformStats& st) {
+  throw_if_interrupted();  // safe point: per axis
+  const int nV = int(in.input.V.rows()), nC = int(in.seg.charts.size());
+  const double h = in.h;
+  // The order evidence of the a-charts (chart_order.h): groups of same-axis charts sharing a vertex
+  // (one plane each), the Voronoi distance samples and the ordered pairs.
+  std::vector<int> axis_charts;
+  for (int c = 0; c < nC; ++c)
+    if (label_axis(in.seg.charts[c].label) == a) axis_charts.push_back(c);
+  if (axis_charts.empty())
+    throw InvalidInput(in.input.source + ": the PolyCube structure has no chart on axis " + std::string(1, char('X' + a)));
+  const AxisChartOrder order =
+      chart_order_evidence(in.Vd, in.graph, in.vcharts, in.chart_label, in.chart_neighbours, a, h);
+  st.merged_same_axis_charts += order.merged_same_axis_charts;
+  const std::vector<DistancePair> dpairs = distance_pairs(order, in);
+  st.distance_pairs += int(dpairs.size());
+  st.ordered_pairs += int(order.ordered.size());
+
+  auto t0 = Clock::now();
+  const PoissonStep ps = poisson_step(in, order, dpairs, a);
+  st.seconds_poisson += since(t0);
+
+  const std::vector<long> k = chart_levels(order, ps, in, st);
+  for (int ch : axis_charts) out.chart_plane[ch] = int(k[order.chart_group[ch]]);
+
+  // Final solve with the chart planes pinned.
+  throw_if_interrupted();
+  t0 = Clock::now();
+  const std::vector<int>& vgroup = order.vertex_group;
+  Eigen::VectorXd u(nV);
+  for (int v = 0; v < nV; ++v)
+    if (vgroup[v] >= 0) u[v] = k[vgroup[v]] * h;
+  if (ps.nFree > 0) {
+    if (in.p.final_solve == "poisson") final_poisson(ps, k, in, vgroup, u);
+    else final_mvc(ps, in, vgroup, a, u, st);
+  }
+  out.U.col(a) = u;
+  st.seconds_final += since(t0);
+  // Planarity: exact by substitution; measured anyway.
+  for (int v = 0; v < nV; ++v)
+    if (vgroup[v] >= 0) st.planarity_error = std::max(st.planarity_error, std::abs(out.U(v, a) - k[vgroup[v]] * h) / in.diag);
+}
+
+/// The per-axis statistics merged into st, in axis order.
+void merge_axes(const std::array<PositionDeformStats, 3>& axis_stats, PositionDeformStats& st) {
   for (const PositionDeformStats& s : axis_stats) {
     st.merged_same_axis_charts += s.merged_same_axis_charts;
     st.distance_pairs += s.distance_pairs;
@@ -415,30 +453,31 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
     st.seconds_poisson += s.seconds_poisson;
     st.seconds_final += s.seconds_final;
   }
+}
 
-  // Untangling (untangle_map.h): a vertex keeps the coordinates of the chart planes it lies on.
-  if (p.untangle_iterations > 0) {
-    report(0.35, "untangling the map");
-    std::vector<std::uint8_t> fixed_axes(size_t(nV), 0);
-    for (Eigen::Index f = 0; f < seg.F.rows(); ++f) {
-      const int a = label_axis(seg.charts[size_t(seg.chart[f])].label);
-      for (int k = 0; k < 3; ++k) fixed_axes[size_t(seg.F(f, k))] |= std::uint8_t(1 << a);
-    }
-    MapUntangleParams up;
-    up.max_iterations = p.untangle_iterations;
-    up.rings = p.untangle_rings;
-    up.seconds = p.untangle_seconds;
-    up.polish_everywhere = p.map_polish == "everywhere";
-    untangle_polycube_map(input.V, input.T, out.U, fixed_axes, up, &st.untangle);
+/// Untangling (step 5, untangle_map.h): a vertex keeps the coordinates of the chart planes it lies on.
+void untangle(const TetMesh& input, const PolyCubeSegmentation& seg, const PositionDeformParams& p, RowMatrixX3d& U,
+              PositionDeformStats& st) {
+  std::vector<std::uint8_t> fixed_axes(size_t(input.V.rows()), 0);
+  for (Eigen::Index f = 0; f < seg.F.rows(); ++f) {
+    const int a = label_axis(seg.charts[size_t(seg.chart[f])].label);
+    for (int k = 0; k < 3; ++k) fixed_axes[size_t(seg.F(f, k))] |= std::uint8_t(1 << a);
   }
+  MapUntangleParams up;
+  up.max_iterations = p.untangle_iterations;
+  up.rings = p.untangle_rings;
+  up.seconds = p.untangle_seconds;
+  up.polish_everywhere = p.map_polish == "everywhere";
+  untangle_polycube_map(input.V, input.T, U, fixed_axes, up, &st.untangle);
+}
 
-  report(0.97, "distortion");
-  // Inverted tets and distortion of input -> PolyCube. A few near-degenerate tets have distortions of
-  // 1e10 and more, so the mean says nothing: report the median, the 99th percentile and the max.
+/// Inverted tets and distortion of input -> PolyCube. A few near-degenerate tets have distortions of
+/// 1e10 and more, so the mean says nothing: the median, the 99th percentile and the max.
+void measure_distortion(const TetMesh& input, const RowMatrixX3d& U, const PositionDeformParams& p, PositionDeformStats& st) {
   std::vector<double> dist(size_t(input.T.rows()), -1.0);
   oneapi::tbb::parallel_for(Eigen::Index(0), input.T.rows(), [&](Eigen::Index t) {
     Eigen::Vector3d q[4], Q[4];
-    for (int k = 0; k < 4; ++k) q[k] = input.V.row(input.T(t, k)), Q[k] = out.U.row(input.T(t, k));
+    for (int k = 0; k < 4; ++k) q[k] = input.V.row(input.T(t, k)), Q[k] = U.row(input.T(t, k));
     if ((Q[1] - Q[0]).cross(Q[2] - Q[0]).dot(Q[3] - Q[0]) > 0)
       dist[size_t(t)] = conformal_distortion(q[0], q[1], q[2], q[3], Q[0], Q[1], Q[2], Q[3]);
   });
@@ -459,6 +498,50 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
     st.distortion_p99 = at(0.99);
     st.distortion_max = *std::max_element(ok.begin(), ok.end());
   }
+}
+
+}  // namespace
+
+PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetMesh& deformed,
+                            std::shared_ptr<const PolyCubeSegmentation> seg_ptr, const PositionDeformParams& p,
+                            PositionDeformStats* stats_out, const ProgressFn& progress) {
+  // The phases' shares of the bar: their times on the built-in shapes (the solves ~1/3, the untangling ~2/3).
+  auto report = [&](double fraction, const char* what) {
+    if (progress) progress(fraction, what);
+  };
+  const TetMesh& input = *input_ptr;
+  const PolyCubeSegmentation& seg = *seg_ptr;
+  check_inputs(input, deformed, seg, p);
+  PositionDeformStats st;
+  st.charts = int(seg.charts.size());
+  const double diag = reference_length(input.V);
+  const double h = p.edge_length * diag;
+  check_budget(input, p, h);
+  const TetEdgeGraph graph(input.T, int(input.V.rows()));
+  AxisInputs in{input, deformed.V, seg, p, graph, {}, {}, {}, {}, {}, {}};
+  in.diag = diag;
+  in.h = h;
+  in.min_d = 2.0 * h;
+  in.sigma = 3.0 * in.min_d;
+  chart_incidence(in);
+  if (p.final_solve == "mvc_laplace") mvc_weights(in);
+
+  PolyCubeMap out;
+  out.input = input_ptr;
+  out.segmentation = seg_ptr;
+  out.edge_length = in.h;
+  out.U.resize(input.V.rows(), 3);
+  out.chart_plane = Eigen::VectorXi::Zero(st.charts);
+  report(0, "chart planes, Poisson and final solves");
+  std::array<PositionDeformStats, 3> axis_stats{};
+  oneapi::tbb::parallel_for(0, 3, [&](int a) { solve_axis(a, in, out, axis_stats[size_t(a)]); });
+  merge_axes(axis_stats, st);
+  if (p.untangle_iterations > 0) {
+    report(0.35, "untangling the map");
+    untangle(input, seg, p, out.U, st);
+  }
+  report(0.97, "distortion");
+  measure_distortion(input, out.U, p, st);
   if (stats_out) *stats_out = st;
   return out;
 }

@@ -24,12 +24,7 @@
 ///     that move the charts least (weighted by their vertex counts) while every order holds, then rounded
 ///     (chart_order.h place_levels); "push_up": rounded, then each chart pushed up to one h above the
 ///     charts below it (a longest-path pass), which lets a stack of small charts carry the shift upwards.
-///     Measured on the 28 shared models (configs/polycube.json): the largest shift of a chart from its
-///     Poisson value falls on 14 (carter 4.46 -> 3.46 h, chinese lion 3.98 -> 2.59, fandisk 1.77 -> 0.77),
-///     the map's inverted tets on 10 (casting 596 -> 460, rockerarm 1,612 -> 1,265, carter 5,516 -> 4,915),
-///     rise on 5 (dragon 535 -> 630); the hex meshes move both ways (casting's minimum 0.048 -> 0.434,
-///     hand's 0.585 -> 0.247, 3 models with inverted hexes where push_up has none): hence the configs'
-///     retry with push_up (runtime/cli_run.h).
+///     The configs retry with push_up (runtime/cli_run.h); docs/position_deform.md has the measurements.
 ///  4. Final solve with the rounded chart coordinates pinned: `final_solve` = "mvc_laplace" (the paper:
 ///     a Laplace equation discretised with mean value coordinates, 2D on the surface, 3D in the volume,
 ///     weights computed on the deformed mesh) or "poisson" (step 1's energy with the charts pinned,
@@ -40,8 +35,7 @@
 ///     no tet turns over) for 200 L-BFGS iterations: every tet towards a similarity of its input tet, and a
 ///     lattice cube mapped back through a near-similarity is a near-cube, what the scaled Jacobian measures.
 ///     The paper's MVC Laplace solve is harmonic per coordinate, not conformal. "region" polishes only the
-///     untangled region (the earlier default). Measured on fandisk (configs/polycube.json): map distortion
-///     1.041 -> 1.030, hex minimum / average 0.394 / 0.967 -> 0.611 / 0.973, +4.6 s.
+///     untangled region. See docs/position_deform.md.
 #pragma once
 
 #include <memory>
@@ -59,10 +53,8 @@ struct PositionDeformParams {
   std::string final_solve = "mvc_laplace";  ///< "mvc_laplace" (§5.2) or "poisson"
   std::string level_placement = "balanced";  ///< chart levels: "balanced" (chart_order.h place_levels) or "push_up"
   int final_jacobi_iterations = 0;     ///< mvc_laplace: BiCGSTAB iterations with the diagonal preconditioner before the
-                                       ///< incomplete LU takes over (0 = incomplete LU at once), [0, 1e6]. Faster (the
-                                       ///< 200k benchmark's stage 3.2 s against 4.9-5.4 s) but off by default: the map's
-                                       ///< untangling amplifies the solves' last-bit differences, and the meshes change
-                                       ///< (position_deform.cpp, at the final solve)
+                                       ///< incomplete LU takes over (0 = incomplete LU at once), [0, 1e6]. Faster, but off
+                                       ///< by default: the meshes change (docs/position_deform.md)
   int untangle_iterations = 600;    ///< L-BFGS iterations of the map's untangling (untangle_map.h); 0 = keep the folds, [0, 1e6]
   int untangle_rings = 2;           ///< the untangling moves the inverted tets' vertices grown by this many rings, [0, 50]
   double untangle_seconds = 0;      ///< wall-time cap of the untangling (0 = none; a cap that is hit makes runs load-dependent), [0, 3600]
