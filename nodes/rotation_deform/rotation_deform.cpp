@@ -398,6 +398,130 @@ double axis_alignment(const RowMatrixX3d& V, const RowMatrixX3i& F, double angle
 
 // ---------------------------------------------------------------------------------------------
 
+namespace {
+
+/// The buffers of one iteration, allocated once per run.
+struct IterationBuffers {
+  RowMatrixX3d face_n;                  ///< unit face normals (0 for degenerate faces)
+  RowMatrixX3d face_a;                  ///< area vectors
+  std::vector<Eigen::Vector4d> target;  ///< per boundary vertex its target quaternion
+  std::vector<char> known, known_next, feature;
+  Eigen::MatrixXd Bq, Bp;               ///< right-hand sides: quaternion Laplace, positions
+  std::vector<Eigen::Matrix3d> rot;     ///< per vertex its rotation
+  std::vector<int> blabel;   ///< direction label (polycube.h) closest to a non-feature boundary vertex's normal, -1 feature
+  std::vector<double> bangle;  ///< degrees between the vertex normal and that direction
+
+  IterationBuffers(const Topology& top, int n)
+      : face_n(top.F.rows(), 3), face_a(top.F.rows(), 3), target(top.bverts.size()), known(top.bverts.size()),
+        known_next(top.bverts.size()), feature(top.bverts.size()), Bq(Eigen::MatrixXd::Zero(n, 4)), Bp(n, 3),
+        rot(size_t(n)), blabel(top.bverts.size(), -1), bangle(top.bverts.size(), 0.0) {}
+};
+
+/// Steps 1-3: boundary normals (area weighted) and features; per non-feature boundary vertex (§4.1) the
+/// minimal axis-aligning rotation towards the closest direction, coherently oriented, and that
+/// direction's label for the flattening. Returns the number of feature vertices.
+int boundary_targets(const Topology& top, const RowMatrixX3d& V, double cos_feature, IterationBuffers& b) {
+  const int nB = static_cast<int>(top.bverts.size());
+  const Eigen::Vector4d identity(0, 0, 0, 1);
+  parallel_range(static_cast<int>(top.F.rows()), [&](int f) {
+    const Eigen::Vector3d a = face_area_vector(V, top.F, f);
+    const double len = a.norm();
+    b.face_a.row(f) = a.transpose();
+    b.face_n.row(f) = len > 0 ? Eigen::RowVector3d(a.transpose() / len) : Eigen::RowVector3d::Zero();
+  });
+  parallel_range(nB, [&](int v) {
+    Eigen::Vector3d nv = Eigen::Vector3d::Zero();
+    bool is_feature = false;
+    for (const int* f = top.bvert_faces.begin(v); f != top.bvert_faces.end(v); ++f) {
+      nv += b.face_a.row(*f).transpose();
+      if (b.face_n.row(*f).squaredNorm() == 0) continue;
+      for (const int* g = f + 1; g != top.bvert_faces.end(v) && !is_feature; ++g)
+        is_feature = b.face_n.row(*g).squaredNorm() > 0 && b.face_n.row(*f).dot(b.face_n.row(*g)) < cos_feature;
+    }
+    const double len = nv.norm();
+    b.feature[v] = is_feature || !(len > 0);
+    b.known[v] = !b.feature[v];
+    b.blabel[v] = -1;
+    b.target[v] = identity;
+    if (!b.feature[v]) {
+      const Eigen::Vector3d un = nv / len;
+      b.blabel[v] = closest_label(un);
+      b.bangle[v] = std::acos(std::min(1.0, std::abs(un[label_axis(b.blabel[v])]))) * 180.0 / kPi;
+      b.target[v] = coherent_quaternion(axis_aligning_rotation(un, label_dir(b.blabel[v])));
+    }
+  });
+  return static_cast<int>(std::count(b.feature.begin(), b.feature.end(), 1));
+}
+
+/// Feature vertices: target = normalised mean of the known targets of their surface neighbours, ring
+/// by ring (right-hand side only, the matrix keeps its anchor rows).
+void propagate_feature_targets(const Topology& top, IterationBuffers& b) {
+  const int nB = static_cast<int>(top.bverts.size());
+  for (bool progress = true; progress;) {
+    progress = false;
+    b.known_next = b.known;
+    for (int v = 0; v < nB; ++v) {
+      if (b.known[v]) continue;
+      Eigen::Vector4d sum = Eigen::Vector4d::Zero();
+      for (const int* o = top.bvert_neighbours.begin(v); o != top.bvert_neighbours.end(v); ++o)
+        if (b.known[*o]) sum += b.target[*o];
+      if (sum.squaredNorm() > 0) {
+        b.target[v] = sum.normalized();
+        b.known_next[v] = 1;
+        progress = true;
+      }
+    }
+    b.known.swap(b.known_next);
+  }
+}
+
+/// Step 5: per vertex the rotation of its normalised quaternion; returns the smallest quaternion norm.
+double vertex_rotations(const Eigen::MatrixXd& q, std::vector<Eigen::Matrix3d>& rot) {
+  return deterministic_reduce(
+      static_cast<int>(q.rows()), std::numeric_limits<double>::infinity(),
+      [&](int v, double& min_norm) {
+        min_norm = std::min(min_norm, q.row(v).norm());
+        rot[v] = Eigen::Quaterniond(q(v, 3), q(v, 0), q(v, 1), q(v, 2)).normalized().toRotationMatrix();
+      },
+      [](double a, double b) { return std::min(a, b); });
+}
+
+/// Step 6, the right-hand side of §4.2 Eq. 1 (times N_i): L v = Σ_j ½(∇_i + ∇_j)(ṽ_i - ṽ_j), pinned
+/// vertices stay.
+void position_rhs(const Topology& top, const RowMatrixX3d& V, const RotationDeformParams& params, IterationBuffers& b) {
+  const double full = params.flatten_full_angle, none = params.flatten_max_angle;
+  parallel_range(top.nV, [&](int i) {
+    const Eigen::Vector3d vi = V.row(i).transpose();
+    if (top.pinned[i]) {
+      b.Bp.row(i) = vi.transpose();
+      return;
+    }
+    Eigen::Vector3d acc = Eigen::Vector3d::Zero(), pinned_sum = Eigen::Vector3d::Zero();
+    const int bi = top.bindex[i];
+    for (const int* j = top.neighbours.begin(i); j != top.neighbours.end(i); ++j) {
+      const Eigen::Vector3d vj = V.row(*j).transpose();
+      Eigen::Vector3d e = (b.rot[i] + b.rot[*j]) * (vi - vj);
+      // Surface flattening (beyond the paper, see the header): a surface edge between two
+      // non-feature vertices with the same closest axis loses the share β w of its component
+      // along the axis, w = 1 up to flatten_full_angle, 0 from flatten_max_angle, linear between.
+      // Edge (j, i) gets -e: rows i and j stay consistent.
+      const int bj = bi >= 0 ? top.bindex[*j] : -1;
+      if (params.flatten > 0 && bj >= 0 && b.blabel[bi] >= 0 && b.blabel[bj] == b.blabel[bi] &&
+          std::find(top.bvert_neighbours.begin(bi), top.bvert_neighbours.end(bi), bj) !=
+              top.bvert_neighbours.end(bi)) {
+        const double angle = std::max(b.bangle[bi], b.bangle[bj]);
+        const double w = angle <= full ? 1.0 : angle >= none ? 0.0 : (none - angle) / (none - full);
+        e[label_axis(b.blabel[bi])] *= 1.0 - params.flatten * w;
+      }
+      acc += e;
+      if (top.pinned[*j]) pinned_sum += vj;
+    }
+    b.Bp.row(i) = (0.5 * acc + pinned_sum).transpose();
+  });
+}
+
+}  // namespace
+
 RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformParams& params,
                                      const IterationCallback& on_iteration) {
   check_params(params);
@@ -409,7 +533,6 @@ RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformP
   // --- Once per run: topology, both matrices, reference shapes for the distortion measure.
   const Topology top = build_topology(input);
   const int n = top.nV;
-  const int nB = static_cast<int>(top.bverts.size());
   const int nT = static_cast<int>(input.T.rows());
   const double w2 = params.anchor_weight * params.anchor_weight;
   std::vector<double> anchor_diag(n, 0.0);
@@ -438,129 +561,31 @@ RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformP
   throw_if_interrupted();
   pos_solver.factor(P);
 
-  res.boundary_vertices = nB;
+  res.boundary_vertices = static_cast<int>(top.bverts.size());
   res.boundary_faces = static_cast<int>(top.F.rows());
   res.components = static_cast<int>(top.pins.size());
   res.mesh = input;
   TetMesh& cur = res.mesh;
   res.input_alignment = axis_alignment(cur.V, top.F);
 
-  // Per-iteration buffers, allocated once.
   const double cos_feature = std::cos(params.feature_angle * kPi / 180.0);
-  RowMatrixX3d face_n(top.F.rows(), 3);  // unit face normals (0 for degenerate faces)
-  RowMatrixX3d face_a(top.F.rows(), 3);  // area vectors
-  std::vector<Eigen::Vector4d> target(nB);
-  std::vector<char> known(nB), known_next(nB), feature(nB);
-  Eigen::MatrixXd Bq = Eigen::MatrixXd::Zero(n, 4), Bp(n, 3);
-  std::vector<Eigen::Matrix3d> rot(n);
-  const Eigen::Vector4d identity(0, 0, 0, 1);
-  std::vector<int> blabel(nB, -1);  // direction label (polycube.h) closest to a non-feature boundary vertex's normal, -1 feature
-  std::vector<double> bangle(nB, 0.0);  // degrees between the vertex normal and that direction
-  const double full = params.flatten_full_angle, none = params.flatten_max_angle;
-
+  IterationBuffers buf(top, n);
   for (int it = 1; it <= params.iterations; ++it) {
     throw_if_interrupted();  // safe point: nothing of this iteration computed yet
     auto t_it = Clock::now();
     RotationIterationStats st;
-
-    // 1. Boundary normals (area weighted) and features.
-    parallel_range(static_cast<int>(top.F.rows()), [&](int f) {
-      const Eigen::Vector3d a = face_area_vector(cur.V, top.F, f);
-      const double len = a.norm();
-      face_a.row(f) = a.transpose();
-      face_n.row(f) = len > 0 ? Eigen::RowVector3d(a.transpose() / len) : Eigen::RowVector3d::Zero();
-    });
-    parallel_range(nB, [&](int b) {
-      Eigen::Vector3d nv = Eigen::Vector3d::Zero();
-      bool is_feature = false;
-      for (const int* f = top.bvert_faces.begin(b); f != top.bvert_faces.end(b); ++f) {
-        nv += face_a.row(*f).transpose();
-        if (face_n.row(*f).squaredNorm() == 0) continue;
-        for (const int* g = f + 1; g != top.bvert_faces.end(b) && !is_feature; ++g)
-          is_feature = face_n.row(*g).squaredNorm() > 0 && face_n.row(*f).dot(face_n.row(*g)) < cos_feature;
-      }
-      const double len = nv.norm();
-      feature[b] = is_feature || !(len > 0);
-      known[b] = !feature[b];
-      // 2-3. §4.1: minimal axis-aligning rotation towards the closest direction, coherently oriented; the
-      // flattening below uses that direction's label.
-      blabel[b] = -1;
-      target[b] = identity;
-      if (!feature[b]) {
-        const Eigen::Vector3d un = nv / len;
-        blabel[b] = closest_label(un);
-        bangle[b] = std::acos(std::min(1.0, std::abs(un[label_axis(blabel[b])]))) * 180.0 / kPi;
-        target[b] = coherent_quaternion(axis_aligning_rotation(un, label_dir(blabel[b])));
-      }
-    });
-    st.feature_vertices = static_cast<int>(std::count(feature.begin(), feature.end(), 1));
-
-    // Feature vertices: target = normalised mean of the known targets of their surface neighbours,
-    // ring by ring (right-hand side only, the matrix keeps its anchor rows).
-    for (bool progress = true; progress;) {
-      progress = false;
-      known_next = known;
-      for (int b = 0; b < nB; ++b) {
-        if (known[b]) continue;
-        Eigen::Vector4d sum = Eigen::Vector4d::Zero();
-        for (const int* o = top.bvert_neighbours.begin(b); o != top.bvert_neighbours.end(b); ++o)
-          if (known[*o]) sum += target[*o];
-        if (sum.squaredNorm() > 0) {
-          target[b] = sum.normalized();
-          known_next[b] = 1;
-          progress = true;
-        }
-      }
-      known.swap(known_next);
-    }
-
+    st.feature_vertices = boundary_targets(top, cur.V, cos_feature, buf);  // 1-3
+    propagate_feature_targets(top, buf);
     // 4. Laplace per quaternion component, soft anchors on every boundary vertex.
-    for (int b = 0; b < nB; ++b) Bq.row(top.bverts[b]) = w2 * target[b].transpose();
-    const Eigen::MatrixXd q = quat_solver.solve(Bq, mode);
+    for (size_t b = 0; b < top.bverts.size(); ++b) buf.Bq.row(top.bverts[b]) = w2 * buf.target[b].transpose();
+    const Eigen::MatrixXd q = quat_solver.solve(buf.Bq, mode);
     throw_if_interrupted();
-
-    // 5. Normalise; per-vertex rotation matrices.
-    st.min_quaternion_norm = deterministic_reduce(
-        n, std::numeric_limits<double>::infinity(),
-        [&](int v, double& min_norm) {
-          min_norm = std::min(min_norm, q.row(v).norm());
-          rot[v] = Eigen::Quaterniond(q(v, 3), q(v, 0), q(v, 1), q(v, 2)).normalized().toRotationMatrix();
-        },
-        [](double a, double b) { return std::min(a, b); });
+    st.min_quaternion_norm = vertex_rotations(q, buf.rot);  // 5
     if (!(st.min_quaternion_norm > 1e-12))
       throw SolverError("rotation_deform: degenerate quaternion (norm " + std::to_string(st.min_quaternion_norm) +
                         ") in iteration " + std::to_string(it));
-
-    // 6. §4.2 Eq. 1 (times N_i): L v = Σ_j ½(∇_i + ∇_j)(ṽ_i - ṽ_j), pinned vertices stay.
-    parallel_range(n, [&](int i) {
-      const Eigen::Vector3d vi = cur.V.row(i).transpose();
-      if (top.pinned[i]) {
-        Bp.row(i) = vi.transpose();
-        return;
-      }
-      Eigen::Vector3d acc = Eigen::Vector3d::Zero(), pinned_sum = Eigen::Vector3d::Zero();
-      const int bi = top.bindex[i];
-      for (const int* j = top.neighbours.begin(i); j != top.neighbours.end(i); ++j) {
-        const Eigen::Vector3d vj = cur.V.row(*j).transpose();
-        Eigen::Vector3d e = (rot[i] + rot[*j]) * (vi - vj);
-        // Surface flattening (beyond the paper, see the header): a surface edge between two
-        // non-feature vertices with the same closest axis loses the share β w of its component
-        // along the axis, w = 1 up to flatten_full_angle, 0 from flatten_max_angle, linear between.
-        // Edge (j, i) gets -e: rows i and j stay consistent.
-        const int bj = bi >= 0 ? top.bindex[*j] : -1;
-        if (params.flatten > 0 && bj >= 0 && blabel[bi] >= 0 && blabel[bj] == blabel[bi] &&
-            std::find(top.bvert_neighbours.begin(bi), top.bvert_neighbours.end(bi), bj) !=
-                top.bvert_neighbours.end(bi)) {
-          const double angle = std::max(bangle[bi], bangle[bj]);
-          const double w = angle <= full ? 1.0 : angle >= none ? 0.0 : (none - angle) / (none - full);
-          e[label_axis(blabel[bi])] *= 1.0 - params.flatten * w;
-        }
-        acc += e;
-        if (top.pinned[*j]) pinned_sum += vj;
-      }
-      Bp.row(i) = (0.5 * acc + pinned_sum).transpose();
-    });
-    const Eigen::MatrixXd x = pos_solver.solve(Bp, mode);
+    position_rhs(top, cur.V, params, buf);  // 6
+    const Eigen::MatrixXd x = pos_solver.solve(buf.Bp, mode);
     cur.V = x;
 
     // Figures of this iteration.
