@@ -173,6 +173,34 @@ class ParamSet {
     return *this;
   }
 
+  /// An enum param, declared once: `names` pairs each value with its JSON name. The JSON holds the name,
+  /// the check lists the names, and the params struct holds the value.
+  /// \pre the struct's default is one of the values named
+  template <class E>
+  ParamSet& add_enum(const std::string& name, E P::*member, std::vector<std::pair<E, std::string>> names,
+                     const std::string& doc) {
+    static_assert(std::is_enum_v<E>, "add_enum takes an enum member");
+    auto name_of = [names](E e) {
+      for (const auto& [value, n] : names)
+        if (value == e) return n;
+      return std::string();
+    };
+    ParamInfo info;
+    info.name = name;
+    info.doc = doc;
+    info.kind = "string";
+    for (const auto& entry : names) info.choices.push_back(entry.second);
+    info.default_value = name_of(P{}.*member);
+    fields_.push_back(Field{info,
+                            [member, names](P& p, const json& v) {
+                              const std::string s = v.get<std::string>();
+                              for (const auto& [value, n] : names)
+                                if (n == s) p.*member = value;
+                            },
+                            [member, name_of](const P& p) { return json(name_of(p.*member)); }});
+    return *this;
+  }
+
   std::vector<ParamInfo> info() const {
     std::vector<ParamInfo> out;
     for (auto& f : fields_) out.push_back(f.info);

@@ -134,14 +134,6 @@ void FactorizationStats::merge_into(nlohmann::json& metrics) const {
   add("solve_seconds", solve_seconds, false);
 }
 
-const char* solve_mode_name(SolveMode m) { return m == SolveMode::Parallel ? "parallel" : "multi_column"; }
-
-SolveMode parse_solve_mode(const std::string& name) {
-  if (name == "multi_column") return SolveMode::MultiColumn;
-  if (name == "parallel") return SolveMode::Parallel;
-  throw SolverError("solve mode `" + name + "` is not one of: multi_column, parallel");
-}
-
 // ---------------------------------------------------------------------------------------------
 
 struct CholmodFactorization::Impl {

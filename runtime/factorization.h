@@ -39,10 +39,6 @@ enum class SolveMode {
   Parallel      ///< tbb::parallel_for over columns, each thread with its own cholmod_common
 };
 
-/// \return "multi_column" or "parallel"
-const char* solve_mode_name(SolveMode m);
-/// \throw SolverError when `name` is neither "multi_column" nor "parallel"
-SolveMode parse_solve_mode(const std::string& name);
 
 /// Sparse symmetric positive definite LL^T factorization (CHOLMOD, supernodal).
 ///

@@ -423,14 +423,14 @@ SurfaceMesh condition_surface(const SurfaceMesh& s, SurfaceRepair repair, const 
   throw_if_interrupted();
   const std::vector<std::string> defects = report.input.defects();
   auto too_fine = [&](const SurfaceDiagnosis& d) {
-    return p.remesh == "always" || (p.remesh == "auto" && d.tessellation_ratio > p.remesh_finer_than);
+    return p.remesh == RemeshWhen::always || (p.remesh == RemeshWhen::finer && d.tessellation_ratio > p.remesh_finer_than);
   };
   const bool fine = too_fine(report.input);
   if (defects.empty() && !fine) {
     report.output = report.input;
     return s;
   }
-  if (!defects.empty() && p.policy == "strict")
+  if (!defects.empty() && p.policy == DefectPolicy::strict)
     throw InvalidInput(name + ": " + join(defects) +
                        "; refused by policy `strict` (policy `auto` repairs it)");
   report.passed_through = false;

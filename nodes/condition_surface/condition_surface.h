@@ -62,9 +62,15 @@ struct SurfaceDiagnosis {
 /// The repair the variant asks for.
 enum class SurfaceRepair { automatic, local, levelset, alpha_wrap };
 
+/// What a defect gets: a repair with a warning (JSON "auto"), or a refusal ("strict").
+enum class DefectPolicy { repair, strict };
+/// When the surface is remeshed to the tet size: when it is finer than remesh_finer_than (JSON "auto"),
+/// never, always.
+enum class RemeshWhen { finer, never, always };
+
 struct ConditionParams {
-  std::string policy = "auto";  ///< auto: repair defects, with a warning; strict: refuse any defect
-  std::string remesh = "auto";  ///< auto: when tessellation_ratio > remesh_finer_than; never; always
+  DefectPolicy policy = DefectPolicy::repair;  ///< repair defects, with a warning, or refuse any defect
+  RemeshWhen remesh = RemeshWhen::finer;      ///< finer: when tessellation_ratio > remesh_finer_than; never; always
   double edge_length = 0.02;      ///< tet edge, fraction of the reference length (as tetrahedralize's)
   double hex_edge_length = 0.01;  ///< hex edge, fraction of the reference length (costs, voxel, bounds)
   double remesh_finer_than = 4.0; ///< remesh when the tessellation is this many times finer than the tets

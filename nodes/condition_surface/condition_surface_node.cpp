@@ -33,9 +33,10 @@ NodeSpec condition_node(const std::string& variant, SurfaceRepair repair, const 
       "condition_surface/" + variant, "Diagnoses the input surface and repairs its defects (" + what +
                                           "); remeshes it to the tet size where it is much finer",
       ParamSet<ConditionParams>()
-          .add_choice("policy", &ConditionParams::policy, {"auto", "strict"},
+          .add_enum("policy", &ConditionParams::policy, {{DefectPolicy::repair, "auto"}, {DefectPolicy::strict, "strict"}},
                       "auto: repair defects with a warning; strict: refuse any defect")
-          .add_choice("remesh", &ConditionParams::remesh, {"auto", "never", "always"},
+          .add_enum("remesh", &ConditionParams::remesh,
+                    {{RemeshWhen::finer, "auto"}, {RemeshWhen::never, "never"}, {RemeshWhen::always, "always"}},
                       "remesh to the tet size: auto (when finer than remesh_finer_than), never, always")
           .add("edge_length", &ConditionParams::edge_length,
                "tet edge, fraction of the reference length (the tetrahedralize node's; configs: ${tet_edge})", 0.002, 0.5)

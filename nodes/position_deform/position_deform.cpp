@@ -93,20 +93,12 @@ struct AxisInputs {
   double diag = 0, h = 0, min_d = 0, sigma = 0;
 };
 
-/// \throw InvalidInput for a deformed mesh of other connectivity or a malformed segmentation,
-///        ConfigError for an unknown mode
-void check_inputs(const TetMesh& input, const TetMesh& deformed, const PolyCubeSegmentation& seg,
-                  const PositionDeformParams& p) {
+/// \throw InvalidInput for a deformed mesh of other connectivity or a malformed segmentation
+void check_inputs(const TetMesh& input, const TetMesh& deformed, const PolyCubeSegmentation& seg) {
   const int nV = int(input.V.rows());
   if (deformed.V.rows() != nV || deformed.T.rows() != input.T.rows())
     throw InvalidInput(input.source + ": the deformed mesh has " + std::to_string(deformed.V.rows()) +
                        " vertices, the input " + std::to_string(nV) + ": they must share connectivity");
-  if (p.final_solve != "mvc_laplace" && p.final_solve != "poisson")
-    throw ConfigError("final_solve = \"" + p.final_solve + "\" is not one of: mvc_laplace, poisson");
-  if (p.level_placement != "balanced" && p.level_placement != "push_up")
-    throw ConfigError("level_placement = \"" + p.level_placement + "\" is not one of: balanced, push_up");
-  if (p.map_polish != "region" && p.map_polish != "everywhere")
-    throw ConfigError("map_polish = \"" + p.map_polish + "\" is not one of: region, everywhere");
   const int nC = int(seg.charts.size());
   if (seg.chart.size() != seg.F.rows()) throw InvalidInput(input.source + ": segmentation has no chart per triangle");
   for (Eigen::Index f = 0; f < seg.F.rows(); ++f) {
@@ -282,7 +274,7 @@ std::vector<long> chart_levels(const AxisChartOrder& order, const PoissonStep& p
     if (o.sign * (c[o.q] - c[o.p]) <= 0) ++st.flipped_chart_orders;
   const OrderAcceptance acc = accept_orders(order.ordered, nG);
   st.order_constraints_dropped += int(acc.dropped.size());
-  if (in.p.level_placement == "balanced") {
+  if (in.p.level_placement == LevelPlacement::balanced) {
     std::vector<double> target(nG), weight(nG);
     for (int g = 0; g < nG; ++g) target[g] = c[g] / h, weight[g] = double(order.group_size[g]);
     k = place_levels(acc, target, weight);
@@ -427,7 +419,7 @@ void solve_axis(int a, const AxisInputs& in, PolyCubeMap& out, PositionDeformSta
   for (int v = 0; v < nV; ++v)
     if (vgroup[v] >= 0) u[v] = k[vgroup[v]] * h;
   if (ps.nFree > 0) {
-    if (in.p.final_solve == "poisson") final_poisson(ps, k, in, vgroup, u);
+    if (in.p.final_solve == FinalSolve::poisson) final_poisson(ps, k, in, vgroup, u);
     else final_mvc(ps, in, vgroup, a, u, st);
   }
   out.U.col(a) = u;
@@ -467,7 +459,7 @@ void untangle(const TetMesh& input, const PolyCubeSegmentation& seg, const Posit
   up.max_iterations = p.untangle_iterations;
   up.rings = p.untangle_rings;
   up.seconds = p.untangle_seconds;
-  up.polish_everywhere = p.map_polish == "everywhere";
+  up.polish_everywhere = p.map_polish == MapPolish::everywhere;
   untangle_polycube_map(input.V, input.T, U, fixed_axes, up, &st.untangle);
 }
 
@@ -511,7 +503,7 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
   };
   const TetMesh& input = *input_ptr;
   const PolyCubeSegmentation& seg = *seg_ptr;
-  check_inputs(input, deformed, seg, p);
+  check_inputs(input, deformed, seg);
   PositionDeformStats st;
   st.charts = int(seg.charts.size());
   const double diag = reference_length(input.V);
@@ -524,7 +516,7 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
   in.min_d = 2.0 * h;
   in.sigma = 3.0 * in.min_d;
   chart_incidence(in);
-  if (p.final_solve == "mvc_laplace") mvc_weights(in);
+  if (p.final_solve == FinalSolve::mvc_laplace) mvc_weights(in);
 
   PolyCubeMap out;
   out.input = input_ptr;

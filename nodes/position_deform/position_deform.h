@@ -47,19 +47,26 @@
 
 namespace polyhex {
 
+/// The final solve with the chart planes pinned (step 4).
+enum class FinalSolve { mvc_laplace, poisson };
+/// The chart levels (step 3).
+enum class LevelPlacement { balanced, push_up };
+/// What the polish after the untangling covers (step 5).
+enum class MapPolish { region, everywhere };
+
 struct PositionDeformParams {
   double edge_length = 0.01;        ///< hex edge length h, fraction of the input's reference length (nodes/algorithms/reference_length.h) (§6: 1 %), [1e-4, 0.5]
   double distance_weight = 1.0;     ///< scale s of the distance-preservation constraints (0 disables them), [0, 1e6]
-  std::string final_solve = "mvc_laplace";  ///< "mvc_laplace" (§5.2) or "poisson"
-  std::string level_placement = "balanced";  ///< chart levels: "balanced" (chart_order.h place_levels) or "push_up"
+  FinalSolve final_solve = FinalSolve::mvc_laplace;  ///< mvc_laplace (§5.2) or poisson
+  LevelPlacement level_placement = LevelPlacement::balanced;  ///< chart levels: balanced (chart_order.h place_levels) or push_up
   int final_jacobi_iterations = 0;     ///< mvc_laplace: BiCGSTAB iterations with the diagonal preconditioner before the
                                        ///< incomplete LU takes over (0 = incomplete LU at once), [0, 1e6]. Faster, but off
                                        ///< by default: the meshes change (docs/position_deform.md)
   int untangle_iterations = 600;    ///< L-BFGS iterations of the map's untangling (untangle_map.h); 0 = keep the folds, [0, 1e6]
   int untangle_rings = 2;           ///< the untangling moves the inverted tets' vertices grown by this many rings, [0, 50]
   double untangle_seconds = 0;      ///< wall-time cap of the untangling (0 = none; a cap that is hit makes runs load-dependent), [0, 3600]
-  std::string map_polish = "everywhere";  ///< after the untangling, L-BFGS at ε -> 0 on the Winslow energy of the whole map
-                                         ///< ("everywhere": every tet towards a similarity) or of the untangled region only ("region")
+  MapPolish map_polish = MapPolish::everywhere;  ///< after the untangling, L-BFGS at ε -> 0 on the Winslow energy of the whole map
+                                               ///< (everywhere: every tet towards a similarity) or of the untangled region only (region)
   double max_hexes = 2e7;           ///< refuse up front when the hex count estimate (volume / h³) exceeds this, [1e3, 2e9]
 };
 
@@ -90,7 +97,7 @@ struct PositionDeformStats {
 /// \pre deformed.V.rows() == input.V.rows(), seg.F indexes input.V, seg.chart in [0, #charts)
 /// \throw InvalidInput when sizes disagree or the structure has no chart on some axis, or when the
 ///        input's volume / h³ (the hex count the lattice would give) exceeds p.max_hexes;
-///        SolverError when a linear solve fails; ConfigError for an unknown final_solve, level_placement or map_polish;
+///        SolverError when a linear solve fails;
 ///        Interrupted after SIGINT/SIGTERM (runtime/cancel.h), checked per axis and before each solve
 /// \param progress  told the phase (chart planes and solves, untangling, distortion); may be empty
 PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input, const TetMesh& deformed,

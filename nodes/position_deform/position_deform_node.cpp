@@ -15,16 +15,17 @@ const bool registered = register_node(make_node<P>(
     ParamSet<P>()
         .add("edge_length", &P::edge_length, "hex edge length, fraction of the input's reference length", 1e-4, 0.5)
         .add("distance_weight", &P::distance_weight, "scale of the same-axis chart distance constraints (0 = off)", 0.0, 1e6)
-        .add_choice("final_solve", &P::final_solve, {"mvc_laplace", "poisson"},
+        .add_enum("final_solve", &P::final_solve, {{FinalSolve::mvc_laplace, "mvc_laplace"}, {FinalSolve::poisson, "poisson"}},
                     "final solve with pinned charts: mean value Laplace (paper) or Poisson")
-        .add_choice("level_placement", &P::level_placement, {"balanced", "push_up"},
+        .add_enum("level_placement", &P::level_placement,
+                  {{LevelPlacement::balanced, "balanced"}, {LevelPlacement::push_up, "push_up"}},
                     "chart levels keeping the orders apart: weighted least-squares placement, or the push of each chart above those below it")
         .add("final_jacobi_iterations", &P::final_jacobi_iterations,
              "mvc_laplace: BiCGSTAB iterations with the diagonal preconditioner before the incomplete LU (0 = ILU at once, the default: see position_deform.h)", 0, 1000000)
         .add("untangle_iterations", &P::untangle_iterations, "L-BFGS iterations of the map's untangling (0 = keep the folds)", 0, 1000000)
         .add("untangle_rings", &P::untangle_rings, "the untangling moves the inverted tets' vertices grown by this many rings", 0, 50)
         .add("untangle_seconds", &P::untangle_seconds, "wall-time cap of the untangling (0 = none)", 0.0, 3600.0)
-        .add_choice("map_polish", &P::map_polish, {"region", "everywhere"},
+        .add_enum("map_polish", &P::map_polish, {{MapPolish::region, "region"}, {MapPolish::everywhere, "everywhere"}},
                     "after the untangling, the barrier polish of the untangled region or of the whole map")
         .add("max_hexes", &P::max_hexes, "refuse up front when volume / h^3 exceeds this", 1e3, 2e9),
     {{"tets", artefact_name<TetMesh>()},

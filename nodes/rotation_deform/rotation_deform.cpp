@@ -316,9 +316,6 @@ void check_params(const RotationDeformParams& p) {
     throw range("flatten_full_angle", p.flatten_full_angle, "[0, 90]");
   if (!(p.flatten_max_angle > p.flatten_full_angle && p.flatten_max_angle <= 90))
     throw range("flatten_max_angle", p.flatten_max_angle, "(flatten_full_angle, 90]");
-  if (p.solve_mode != "multi_column" && p.solve_mode != "parallel")
-    throw ConfigError("rotation_deform: param `solve_mode` = \"" + p.solve_mode +
-                      "\" is not one of: multi_column, parallel");
 }
 
 void check_mesh(const TetMesh& m) {
@@ -526,7 +523,7 @@ RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformP
                                      const IterationCallback& on_iteration) {
   check_params(params);
   check_mesh(input);
-  const SolveMode mode = parse_solve_mode(params.solve_mode);
+  const SolveMode mode = params.solve_mode;
   RotationDeformResult res;
   auto t_assemble = Clock::now();
 

@@ -95,7 +95,7 @@ struct RotationDeformParams {
   double flatten = 1.0;          ///< β of the surface flattening in Eq. 1 (0 = the paper's Eq. 1; see the file comment), [0, 1]
   double flatten_full_angle = 30;  ///< degrees: edges whose end normals are within this of their axis get the full β, [0, 90]
   double flatten_max_angle = 50;   ///< degrees: from this deviation on no flattening (linear between), (flatten_full_angle, 90]
-  std::string solve_mode = "multi_column";  ///< "multi_column" (one 4- and one 3-column solve) or "parallel" (TBB over columns)
+  SolveMode solve_mode = SolveMode::MultiColumn;  ///< one 4- and one 3-column solve, or TBB over columns (runtime/factorization.h)
   bool save_iterations = false;  ///< the binding writes each iteration's mesh as <out>/<id>.iter<k>.vtk
 };
 
@@ -129,7 +129,7 @@ using IterationCallback = std::function<void(int k, const TetMesh& deformed, con
 /// Rotation-driven deformation of a tet mesh (paper §4), `params.iterations` times.
 /// \pre tets.T indices in range, every vertex used by a tet, positive tets, finite positions
 /// \throw InvalidInput for an empty mesh, an index out of range, an unused vertex or a non-finite
-///        position; ConfigError for params out of range or an unknown solve_mode;
+///        position; ConfigError for params out of range;
 ///        SolverError if a factorization fails; Interrupted after SIGINT/SIGTERM (runtime/cancel.h),
 ///        checked before each factorization and twice per iteration
 RotationDeformResult rotation_deform(const TetMesh& tets, const RotationDeformParams& params,

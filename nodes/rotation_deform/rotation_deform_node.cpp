@@ -10,6 +10,10 @@ namespace {
 
 using P = RotationDeformParams;
 
+/// The JSON names of the solve modes (the param and the report's `solve_mode`).
+const std::vector<std::pair<SolveMode, std::string>> kSolveModes = {{SolveMode::MultiColumn, "multi_column"},
+                                                                    {SolveMode::Parallel, "parallel"}};
+
 const bool registered = register_node(make_node<P>(
     "rotation_deform/quaternion_laplace",
     "Rotation-driven deformation (§4): quaternion Laplace field from axis-aligning boundary rotations, "
@@ -30,7 +34,7 @@ const bool registered = register_node(make_node<P>(
         .add("flatten_max_angle", &P::flatten_max_angle,
              "degrees: no flattening where an end normal deviates more (linear in between), > flatten_full_angle", 0,
              90)
-        .add_choice("solve_mode", &P::solve_mode, {"multi_column", "parallel"},
+        .add_enum("solve_mode", &P::solve_mode, kSolveModes,
                     "several right-hand sides: one multi-column solve or TBB-parallel columns")
         .add("save_iterations", &P::save_iterations, "write each iteration's mesh as <out>/<id>.iter<k>.vtk"),
     {{"tets", artefact_name<TetMesh>()}}, artefact_name<TetMesh>(),
@@ -61,7 +65,8 @@ const bool registered = register_node(make_node<P>(
       m["iterations"] = static_cast<int>(r.iterations.size());
       r.factor_stats.merge_into(m);  // factorizations, solves, factor_seconds, solve_seconds, analyses, ...
       m["assemble_seconds"] = r.assemble_seconds;
-      m["solve_mode"] = p.solve_mode;
+      for (const auto& [mode, name] : kSolveModes)
+        if (mode == p.solve_mode) m["solve_mode"] = name;
       m["alignment_input"] = r.input_alignment;
       json alignment = json::array(), inverted = json::array(), distortion = json::array(),
            distortion_max = json::array(), volume = json::array(), qmin = json::array(), features = json::array(),

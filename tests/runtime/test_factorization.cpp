@@ -154,9 +154,4 @@ TEST_CASE("cholmod: failures throw SolverError with a clear message", "[cholmod]
     f.analyse(laplacian3d(3, 1.0, false));
     CHECK_SOLVER_ERROR(f.factor(laplacian3d(3, 1.0, true)), Catch::Contains("pattern differs"));
   }
-  SECTION("solve mode names") {
-    CHECK(polyhex::parse_solve_mode("parallel") == SolveMode::Parallel);
-    CHECK(std::string(polyhex::solve_mode_name(SolveMode::MultiColumn)) == "multi_column");
-    CHECK_SOLVER_ERROR(polyhex::parse_solve_mode("gpu"), Catch::Equals("solve mode `gpu` is not one of: multi_column, parallel"));
-  }
 }

@@ -303,7 +303,7 @@ TEST_CASE("condition_surface: what cannot be repaired soundly is refused", "[con
   }
   SECTION("policy strict refuses any defect, naming it") {
     ConditionParams strict = p;
-    strict.policy = "strict";
+    strict.policy = DefectPolicy::strict;
     const SurfaceMesh s = sphere(24);
     REQUIRE_THROWS_WITH(condition_surface(punch(s, {0}), SurfaceRepair::automatic, strict, r),
                         Contains("sphere: 1 open boundary loop") && Contains("refused by policy `strict`"));

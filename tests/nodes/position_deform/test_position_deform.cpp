@@ -87,8 +87,8 @@ TEST_CASE("an axis-aligned box maps onto itself: MVC Laplace has linear precisio
 }
 
 TEST_CASE("box and L-block after the rotation stage: planar integer charts, order kept", "[position]") {
-  for (auto final_solve : {"mvc_laplace", "poisson"}) {
-    INFO(final_solve);
+  for (FinalSolve final_solve : {FinalSolve::mvc_laplace, FinalSolve::poisson}) {
+    INFO(int(final_solve));
     PositionDeformParams p;
     p.edge_length = 0.05;
     p.final_solve = final_solve;
@@ -178,9 +178,13 @@ TEST_CASE("bad inputs to position_deform are named", "[position]") {
   TetMesh other = *tets;
   other.V.conservativeResize(other.V.rows() - 1, 3);
   REQUIRE_THROWS_WITH(position_deform(tets, other, seg, {}), Catch::Contains("must share connectivity"));
-  PositionDeformParams p;
-  p.final_solve = "magic";
-  REQUIRE_THROWS_WITH(position_deform(tets, *tets, seg, p), Catch::Contains("not one of: mvc_laplace, poisson"));
+  // A mode that does not exist is refused by the binding, with the choices listed.
+  const NodeSpec* spec = Registry::instance().find("position_deform/chart_planes");
+  REQUIRE(spec != nullptr);
+  REQUIRE_THROWS_WITH(spec->check_params(json{{"final_solve", "magic"}}, "polycube"),
+                      Catch::Contains("not one of: mvc_laplace, poisson"));
+  CHECK(spec->check_params(json{{"level_placement", "push_up"}}, "polycube")["level_placement"] == "push_up");
+  CHECK(spec->check_params(json::object(), "polycube")["map_polish"] == "everywhere");
   // A unit cube (diagonal sqrt 3) at h = 0.001 sqrt 3 would give about 1.9e8 hexes: refused before any solve,
   // with the smallest edge length that fits (0.001 * cbrt(1.92e8 / 2e7) = 0.00213).
   PositionDeformParams tiny;
