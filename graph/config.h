@@ -51,7 +51,7 @@ json substitute_vars(const json& j, const std::map<std::string, std::string>& va
 
 /// Checks the structure of a config (top-level object with a `nodes` array, each node an object with
 /// string `id` and `type`, optional object `params`, object-or-array `inputs`, no other keys, unique ids).
-/// The optional top-level `description`, `sweep` (tools/sweep.cpp) and `retry` (runtime/cli_run.h) are
+/// The optional top-level `description`, `sweep` (tools/sweep.cpp) and `retry` (tools/cli_run.h) are
 /// checked by their users. `vars` (name -> number, string, boolean or a product like "2 * ${hex_edge}")
 /// is substituted into the params: a param that is exactly `"${name}"` takes the var's value and type.
 /// `branches` is expanded (see above).

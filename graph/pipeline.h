@@ -66,7 +66,7 @@ struct RunResult {
   double seconds = 0;
   std::string error;              ///< empty when the run succeeded
   bool interrupted = false;       ///< stopped by SIGINT/SIGTERM (error says where)
-  json retry;                     ///< the config's retry attempts (runtime/cli_run.h); null when it has none
+  json retry;                     ///< the config's retry attempts (tools/cli_run.h); null when it has none
   /// "ok", "interrupted" or "error"
   std::string status() const { return error.empty() ? "ok" : interrupted ? "interrupted" : "error"; }
   /// report.json: {polyhex_version, status, error?, seconds, nodes: {id: {type, ran, skipped?, seconds, cache_hit, metrics,

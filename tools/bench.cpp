@@ -30,7 +30,7 @@
 
 #include "graph/pipeline.h"
 #include "runtime/atomic_file.h"
-#include "runtime/cli_run.h"
+#include "tools/cli_run.h"
 #include "tools/commands.h"
 
 namespace polyhex {

@@ -222,7 +222,7 @@ def main():
            " interior edge valence != 6 or boundary vertex with != 4 boundary quads; Hausdorff relative to the input's bbox"
            " diagonal, in 1e-3). `paper` is the 2011 paper's Table 1 (min / avg SJ), `best` the best published PolyCube mesh"
            " listed in `../shared/data/README.md` (min / avg SJ). `attempts`: the SJ min of each attempt of the config's"
-           " `retry` block (runtime/cli_run.h) and the one kept; `time s` is the time of all attempts.", "",
+           " `retry` block (tools/cli_run.h) and the one kept; `time s` is the time of all attempts.", "",
            " `conditioning`: what the surface conditioning did (`as read`: passed through bit for bit; the repair; remeshed"
            " to the tet size when the input was more than 4 times finer).", "",
            "| model | conditioning | tets | charts | hexes | inverted | SJ min | SJ avg | irregular % | Hausdorff mean / max (1e-3) | time s | attempts | paper min / avg | best min / avg |",

@@ -25,8 +25,8 @@
 #include "graph/pipeline.h"
 #include "runtime/atomic_file.h"
 #include "runtime/cancel.h"
-#include "runtime/cli_run.h"
-#include "runtime/report_html.h"
+#include "tools/cli_run.h"
+#include "report/report_html.h"
 #include "tools/commands.h"
 
 using namespace polyhex;

@@ -1,11 +1,11 @@
 // `polyhex report RUN_DIR`: RUN_DIR/report.html from the run's report.json and hex mesh
-// (runtime/report_html.h). Exit 0 when written; 1 naming the file when report.json, the mesh or three.js
+// (report/report_html.h). Exit 0 when written; 1 naming the file when report.json, the mesh or three.js
 // is missing or malformed (no report.html is written then).
 #include <cstdio>
 #include <memory>
 #include <string>
 
-#include "runtime/report_html.h"
+#include "report/report_html.h"
 #include "tools/commands.h"
 
 namespace polyhex {

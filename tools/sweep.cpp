@@ -67,7 +67,7 @@
 #include "graph/pipeline.h"
 #include "runtime/atomic_file.h"
 #include "runtime/cancel.h"
-#include "runtime/cli_run.h"
+#include "tools/cli_run.h"
 #include "tools/commands.h"
 
 extern char** environ;

@@ -24,7 +24,7 @@
 ///     that move the charts least (weighted by their vertex counts) while every order holds, then rounded
 ///     (chart_order.h place_levels); "push_up": rounded, then each chart pushed up to one h above the
 ///     charts below it (a longest-path pass), which lets a stack of small charts carry the shift upwards.
-///     The configs retry with push_up (runtime/cli_run.h); docs/position_deform.md has the measurements.
+///     The configs retry with push_up (tools/cli_run.h); docs/position_deform.md has the measurements.
 ///  4. Final solve with the rounded chart coordinates pinned: `final_solve` = "mvc_laplace" (the paper:
 ///     a Laplace equation discretised with mean value coordinates, 2D on the surface, 3D in the volume,
 ///     weights computed on the deformed mesh) or "poisson" (step 1's energy with the charts pinned,

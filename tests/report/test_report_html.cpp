@@ -1,4 +1,4 @@
-// The HTML report's data and page (runtime/report_html.h), on generated meshes and reports; the end-to-end
+// The HTML report's data and page (report/report_html.h), on generated meshes and reports; the end-to-end
 // run in headless Chromium is tests/tools/test_report.cpp.
 #include <catch2/catch.hpp>
 
@@ -12,7 +12,7 @@
 #include "nodes/quality/quality.h"
 #include "nodes/quality/quality_json.h"
 #include "runtime/errors.h"
-#include "runtime/report_html.h"
+#include "report/report_html.h"
 #include "tests/helpers/cli.h"
 #include "tests/helpers/hex_fixtures.h"
 

@@ -1,4 +1,4 @@
-#include "runtime/report_html.h"
+#include "report/report_html.h"
 
 #include <algorithm>
 #include <cmath>
@@ -18,7 +18,7 @@
 
 namespace polyhex {
 
-const char* report_page_template();  // runtime/report_page.html, embedded by CMake (cmake/embed_text.cmake)
+const char* report_page_template();  // report/report_page.html, embedded by CMake (cmake/embed_text.cmake)
 
 namespace {
 

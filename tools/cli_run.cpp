@@ -1,4 +1,4 @@
-#include "runtime/cli_run.h"
+#include "tools/cli_run.h"
 
 #include <unistd.h>
 
