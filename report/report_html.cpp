@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "nodes/artefacts/hex_topology.h"
-#include "nodes/io/hexmesh_io.h"
-#include "nodes/quality/quality.h"
+#include "nodes/formats/hexmesh_io.h"
+#include "nodes/algorithms/hex_quality.h"
 #include "runtime/atomic_file.h"
 #include "runtime/errors.h"
 

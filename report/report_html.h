@@ -8,7 +8,7 @@
 ///   sj_min >= the retry block's `min_sj` (ReportHtmlParams::default_min_sj when the run had no retry),
 ///   sj_below_0_2 = 0 and the topology counts (unused vertices, faces in more than two hexes,
 ///   non-manifold boundary edges) = 0; the other figures without a threshold;
-/// - histograms of the per-hex scaled Jacobian and edge ratio (both from nodes/quality/quality.h, computed
+/// - histograms of the per-hex scaled Jacobian and edge ratio (both from nodes/algorithms/hex_quality.h, computed
 ///   on the mesh the run wrote) and the irregular vertices (count and share);
 /// - per-node times as bars (slowest first: report.json keeps no node order) and the retry attempts;
 /// - a 3D view (three.js, orbit controls) of the boundary quads coloured by their hex's scaled Jacobian,

@@ -4,10 +4,10 @@
 #include <iostream>
 #include <memory>
 
-#include "nodes/io/hexmesh_io.h"
-#include "nodes/io/surface_io.h"
+#include "nodes/formats/hexmesh_io.h"
+#include "nodes/formats/surface_io.h"
 #include "nodes/quality/quality_json.h"
-#include "nodes/shapes/shapes.h"
+#include "nodes/algorithms/shapes.h"
 
 namespace polyhex {
 

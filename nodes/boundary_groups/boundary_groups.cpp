@@ -7,9 +7,9 @@
 #include <string>
 
 #include "nodes/artefacts/boundary_groups.h"
-#include "nodes/optimize/features.h"
-#include "nodes/quality/quality.h"
-#include "nodes/quality/triangle_tree.h"
+#include "nodes/algorithms/features.h"
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/algorithms/triangle_tree.h"
 #include "runtime/errors.h"
 
 namespace polyhex {

@@ -10,8 +10,8 @@
 
 #include "nodes/algorithms/reference_length.h"
 #include "nodes/condition_surface/surface_ops.h"
-#include "nodes/io/surface_io.h"
-#include "nodes/quality/quality.h"
+#include "nodes/formats/surface_io.h"
+#include "nodes/algorithms/hex_quality.h"
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
 #include "runtime/union_find.h"

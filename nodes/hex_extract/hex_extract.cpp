@@ -17,7 +17,7 @@
 #include <unordered_set>
 #include <vector>
 
-#include "nodes/quality/quality.h"
+#include "nodes/algorithms/hex_quality.h"
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
 

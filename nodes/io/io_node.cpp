@@ -5,9 +5,9 @@
 #include <type_traits>
 
 #include "graph/node.h"
-#include "nodes/io/hexmesh_io.h"
-#include "nodes/io/surface_io.h"
-#include "nodes/io/tetmesh_io.h"
+#include "nodes/formats/hexmesh_io.h"
+#include "nodes/formats/surface_io.h"
+#include "nodes/formats/tetmesh_io.h"
 
 namespace polyhex {
 namespace {

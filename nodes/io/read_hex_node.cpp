@@ -2,7 +2,7 @@
 #include <filesystem>
 
 #include "graph/node.h"
-#include "nodes/io/hexmesh_io.h"
+#include "nodes/formats/hexmesh_io.h"
 
 namespace polyhex {
 namespace {

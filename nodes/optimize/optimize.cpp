@@ -1,7 +1,7 @@
 // Hex mesh optimization (paper §6): untangle, max-min scaled Jacobian, shape improvement. See optimize.h.
 #include "nodes/optimize/optimize.h"
-#include "nodes/optimize/hex_corners.h"
-#include "nodes/optimize/features.h"
+#include "nodes/algorithms/hex_corners.h"
+#include "nodes/algorithms/features.h"
 #include "nodes/artefacts/cell_rings.h"
 #include "nodes/artefacts/hex_topology.h"
 #include "nodes/optimize/untangle_global.h"
@@ -20,8 +20,8 @@
 #include <string>
 #include <vector>
 
-#include "nodes/quality/quality.h"
-#include "nodes/quality/triangle_tree.h"
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/algorithms/triangle_tree.h"
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
 

@@ -1,6 +1,6 @@
 // Global untangling by L-BFGS on the regularised Winslow energy. See untangle_global.h.
 #include "nodes/optimize/untangle_global.h"
-#include "nodes/optimize/hex_corners.h"
+#include "nodes/algorithms/hex_corners.h"
 #include "nodes/artefacts/cell_rings.h"
 #include "nodes/artefacts/hex_topology.h"
 
@@ -13,7 +13,7 @@
 #include <limits>
 #include <vector>
 
-#include "nodes/quality/quality.h"
+#include "nodes/algorithms/hex_quality.h"
 #include "runtime/cancel.h"
 #include "runtime/lbfgs.h"
 

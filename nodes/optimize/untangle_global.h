@@ -24,7 +24,7 @@
 #include <vector>
 
 #include "nodes/artefacts/meshes.h"
-#include "nodes/quality/triangle_tree.h"
+#include "nodes/algorithms/triangle_tree.h"
 
 namespace polyhex {
 

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "nodes/quality/quality.h"
-#include "nodes/quality/triangle_tree.h"
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/algorithms/triangle_tree.h"
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
 

@@ -1,6 +1,6 @@
 #include "nodes/polycube_segment/polycube_segment.h"
 
-#include "nodes/polycube_segment/chart_order.h"
+#include "nodes/algorithms/chart_order.h"
 
 #include <Eigen/Geometry>
 
@@ -18,7 +18,6 @@
 #include <tuple>
 
 #include "nodes/algorithms/reference_length.h"
-#include "nodes/io/surface_io.h"
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
 
@@ -1470,16 +1469,6 @@ void require_valid_polycube(const PolyCubeSegmentation& s) {
                     id_list(s.failing_charts) + "):";
   for (auto& p : s.problems) msg += "\n  " + p;
   throw InvalidInput(msg);
-}
-
-void write_polycube_vtk(const std::filesystem::path& path, const RowMatrixX3d& V, const PolyCubeSegmentation& s) {
-  SurfaceMesh surface{V, s.F, s.source};
-  CellData data;
-  std::vector<int> chart(s.chart.data(), s.chart.data() + s.chart.size());
-  std::vector<int> label(s.label.data(), s.label.data() + s.label.size()), axis(label.size());
-  for (size_t t = 0; t < label.size(); ++t) axis[t] = label_axis(label[t]);
-  data.ints = {{"chart", chart}, {"axis", axis}, {"label", label}};
-  write_surface(surface, path, data);
 }
 
 }  // namespace polyhex

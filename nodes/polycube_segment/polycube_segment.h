@@ -147,10 +147,4 @@ std::pair<int, int> repair_polycube_labels(const RowMatrixX3d& V, const RowMatri
 /// \throw InvalidInput listing the problems and naming the failing charts when !s.valid
 void require_valid_polycube(const PolyCubeSegmentation& s);
 
-/// Writes the labelled surface as legacy VTK polydata with cell data `chart`, `axis` (0..2) and
-/// `label` (0..5 = +X,-X,+Y,-Y,+Z,-Z) (nodes/io write_surface, atomic).
-/// \param V  #V by 3 positions the triangles index (e.g. the deformed tet mesh's V)
-/// \pre path ends in .vtk   \throw IOError when the file cannot be written
-void write_polycube_vtk(const std::filesystem::path& path, const RowMatrixX3d& V, const PolyCubeSegmentation& s);
-
 }  // namespace polyhex

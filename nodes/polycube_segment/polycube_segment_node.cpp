@@ -1,5 +1,6 @@
 // Binding of polycube_segment (paper §5.1): deformed TetMesh -> PolyCubeSegmentation.
 #include "graph/node.h"
+#include "nodes/formats/polycube_vtk.h"
 #include "nodes/polycube_segment/polycube_segment.h"
 
 namespace polyhex {

@@ -1,7 +1,7 @@
 #include "nodes/position_deform/position_deform.h"
 
 #include "nodes/algorithms/reference_length.h"
-#include "nodes/polycube_segment/chart_order.h"
+#include "nodes/algorithms/chart_order.h"
 
 #include <Eigen/Dense>
 #include <Eigen/IterativeLinearSolvers>

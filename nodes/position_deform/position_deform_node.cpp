@@ -1,7 +1,7 @@
 // Binding of the position-driven deformation (paper §5.2).
 #include "graph/node.h"
-#include "nodes/io/tetmesh_io.h"
-#include "nodes/polycube_segment/polycube_segment.h"
+#include "nodes/formats/tetmesh_io.h"
+#include "nodes/formats/polycube_vtk.h"
 #include "nodes/position_deform/position_deform.h"
 
 namespace polyhex {

@@ -10,7 +10,7 @@
 #include <limits>
 
 #include "nodes/artefacts/cell_rings.h"
-#include "nodes/optimize/hex_corners.h"
+#include "nodes/algorithms/hex_corners.h"
 #include "runtime/lbfgs.h"
 
 namespace polyhex {

@@ -5,7 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "nodes/quality/quality.h"
+#include "nodes/algorithms/hex_quality.h"
 
 namespace polyhex {
 

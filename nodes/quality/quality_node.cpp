@@ -1,7 +1,7 @@
 /// @file quality_node.cpp
 /// @brief Binding of the `quality` node: a sink that puts the figures of hex_quality into the report.
 #include "graph/node.h"
-#include "nodes/quality/quality.h"
+#include "nodes/algorithms/hex_quality.h"
 #include "nodes/quality/quality_json.h"
 
 namespace polyhex {

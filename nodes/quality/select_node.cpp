@@ -5,7 +5,7 @@
 #include <string>
 
 #include "graph/node.h"
-#include "nodes/quality/quality.h"
+#include "nodes/algorithms/hex_quality.h"
 
 namespace polyhex {
 namespace {

@@ -1,7 +1,7 @@
 /// @file shapes_node.cpp
 /// @brief Binding of the `shapes` node: a built-in closed surface, no input.
 #include "graph/node.h"
-#include "nodes/shapes/shapes.h"
+#include "nodes/algorithms/shapes.h"
 
 namespace polyhex {
 namespace {

@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "nodes/algorithms/reference_length.h"
-#include "nodes/io/surface_io.h"
+#include "nodes/formats/surface_io.h"
 #include "runtime/errors.h"
 
 namespace polyhex {

@@ -20,9 +20,9 @@
 #include <string_view>
 #include <utility>
 
-#include "nodes/io/hexmesh_io.h"
-#include "nodes/io/surface_io.h"
-#include "nodes/io/tetmesh_io.h"
+#include "nodes/formats/hexmesh_io.h"
+#include "nodes/formats/surface_io.h"
+#include "nodes/formats/tetmesh_io.h"
 
 namespace polyhex_fuzz {
 

@@ -15,8 +15,8 @@
 #include "graph/config.h"
 #include "graph/pipeline.h"
 #include "nodes/artefacts/serialize.h"
-#include "nodes/io/surface_io.h"
-#include "nodes/shapes/shapes.h"
+#include "nodes/formats/surface_io.h"
+#include "nodes/algorithms/shapes.h"
 #include "tests/helpers/cli.h"
 
 using namespace polyhex;

@@ -8,7 +8,7 @@
 #include <string>
 
 #include "nodes/artefacts/meshes.h"
-#include "nodes/quality/quality.h"
+#include "nodes/algorithms/hex_quality.h"
 
 namespace polyhex::test {
 

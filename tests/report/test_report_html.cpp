@@ -8,8 +8,8 @@
 #include <numeric>
 #include <set>
 
-#include "nodes/io/hexmesh_io.h"
-#include "nodes/quality/quality.h"
+#include "nodes/formats/hexmesh_io.h"
+#include "nodes/algorithms/hex_quality.h"
 #include "nodes/quality/quality_json.h"
 #include "runtime/errors.h"
 #include "report/report_html.h"

@@ -13,8 +13,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "nodes/io/surface_io.h"
-#include "nodes/shapes/shapes.h"
+#include "nodes/formats/surface_io.h"
+#include "nodes/algorithms/shapes.h"
 #include "tests/helpers/cli.h"
 
 namespace fs = std::filesystem;

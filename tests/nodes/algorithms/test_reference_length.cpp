@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "nodes/algorithms/reference_length.h"
-#include "nodes/shapes/shapes.h"
+#include "nodes/algorithms/shapes.h"
 #include "tests/helpers/rotations.h"
 
 using namespace polyhex;

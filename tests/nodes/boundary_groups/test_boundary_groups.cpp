@@ -7,7 +7,7 @@
 #include "nodes/artefacts/boundary_groups.h"
 #include "nodes/boundary_groups/boundary_groups.h"
 #include "nodes/hex_extract/hex_extract.h"
-#include "nodes/quality/quality.h"
+#include "nodes/algorithms/hex_quality.h"
 #include "runtime/errors.h"
 #include "tests/helpers/voxel_maps.h"
 

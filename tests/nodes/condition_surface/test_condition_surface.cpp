@@ -10,9 +10,9 @@
 
 #include "nodes/condition_surface/condition_surface.h"
 #include "nodes/condition_surface/surface_ops.h"
-#include "nodes/io/surface_io.h"
-#include "nodes/quality/quality.h"
-#include "nodes/shapes/shapes.h"
+#include "nodes/formats/surface_io.h"
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/algorithms/shapes.h"
 #include "nodes/tetrahedralize/tetgen.h"
 #include "runtime/errors.h"
 #include "tests/helpers/cli.h"

@@ -5,7 +5,7 @@
 #include <set>
 
 #include "nodes/hex_extract/hex_extract.h"
-#include "nodes/quality/quality.h"
+#include "nodes/algorithms/hex_quality.h"
 #include "tests/helpers/voxel_maps.h"
 
 using namespace polyhex;

@@ -5,7 +5,7 @@
 
 #include "graph/node.h"
 #include "nodes/hex_from_tets/split.h"
-#include "nodes/quality/quality.h"
+#include "nodes/algorithms/hex_quality.h"
 #include "tests/helpers/hex_fixtures.h"
 
 using namespace polyhex;

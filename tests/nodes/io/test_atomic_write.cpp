@@ -11,8 +11,8 @@
 #include <fstream>
 #include <iterator>
 
-#include "nodes/io/hexmesh_io.h"
-#include "nodes/io/surface_io.h"
+#include "nodes/formats/hexmesh_io.h"
+#include "nodes/formats/surface_io.h"
 #include "runtime/atomic_file.h"
 #include "runtime/errors.h"
 #include "tests/helpers/io_checks.h"

@@ -6,8 +6,8 @@
 #include <cstring>
 #include <limits>
 
-#include "nodes/io/surface_io.h"
-#include "nodes/io/tetmesh_io.h"
+#include "nodes/formats/surface_io.h"
+#include "nodes/formats/tetmesh_io.h"
 #include "runtime/errors.h"
 #include "tests/helpers/io_checks.h"
 

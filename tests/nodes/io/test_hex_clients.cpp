@@ -11,7 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "nodes/io/hexmesh_io.h"
+#include "nodes/formats/hexmesh_io.h"
 #include "tests/helpers/cli.h"
 #include "tests/helpers/report.h"
 #include "tests/helpers/io_checks.h"

@@ -6,9 +6,9 @@
 #include <thread>
 
 #include "nodes/artefacts/boundary_groups.h"
-#include "nodes/io/hexmesh_io.h"
-#include "nodes/io/solver_formats.h"
-#include "nodes/io/tetmesh_io.h"
+#include "nodes/formats/hexmesh_io.h"
+#include "nodes/formats/solver_formats.h"
+#include "nodes/formats/tetmesh_io.h"
 #include "runtime/errors.h"
 #include "tests/helpers/io_checks.h"
 

@@ -1,9 +1,9 @@
 #include <catch2/catch.hpp>
 
 #include "graph/node.h"
-#include "nodes/io/hexmesh_io.h"
-#include "nodes/io/surface_io.h"
-#include "nodes/io/tetmesh_io.h"
+#include "nodes/formats/hexmesh_io.h"
+#include "nodes/formats/surface_io.h"
+#include "nodes/formats/tetmesh_io.h"
 #include "tests/helpers/io_checks.h"
 
 using namespace polyhex;

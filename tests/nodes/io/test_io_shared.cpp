@@ -2,8 +2,8 @@
 
 #include <chrono>
 
-#include "nodes/io/surface_io.h"
-#include "nodes/io/tetmesh_io.h"
+#include "nodes/formats/surface_io.h"
+#include "nodes/formats/tetmesh_io.h"
 #include "tests/helpers/io_checks.h"
 
 using namespace polyhex;

@@ -3,7 +3,7 @@
 #include <chrono>
 #include <cstring>
 
-#include "nodes/io/surface_io.h"
+#include "nodes/formats/surface_io.h"
 #include "runtime/errors.h"
 #include "tests/helpers/io_checks.h"
 

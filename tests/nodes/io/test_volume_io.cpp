@@ -6,8 +6,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "nodes/io/hexmesh_io.h"
-#include "nodes/io/tetmesh_io.h"
+#include "nodes/formats/hexmesh_io.h"
+#include "nodes/formats/tetmesh_io.h"
 #include "runtime/errors.h"
 #include "tests/helpers/io_checks.h"
 

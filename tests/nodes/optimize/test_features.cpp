@@ -3,9 +3,9 @@
 
 #include <cmath>
 
-#include "nodes/optimize/features.h"
+#include "nodes/algorithms/features.h"
 #include "nodes/optimize/optimize.h"
-#include "nodes/quality/quality.h"
+#include "nodes/algorithms/hex_quality.h"
 #include "runtime/errors.h"
 #include "tests/helpers/voxel_maps.h"
 

@@ -9,14 +9,14 @@
 #include <sstream>
 
 #include "nodes/hex_extract/hex_extract.h"
-#include "nodes/io/surface_io.h"
+#include "nodes/formats/surface_io.h"
 #include "nodes/optimize/optimize.h"
 #include "nodes/pad/pad.h"
 #include "nodes/polycube_segment/polycube_segment.h"
 #include "nodes/position_deform/position_deform.h"
-#include "nodes/quality/quality.h"
+#include "nodes/algorithms/hex_quality.h"
 #include "nodes/rotation_deform/rotation_deform.h"
-#include "nodes/shapes/shapes.h"
+#include "nodes/algorithms/shapes.h"
 #include "nodes/tetrahedralize/tetgen.h"
 
 using namespace polyhex;

@@ -5,8 +5,8 @@
 
 #include "graph/node.h"
 #include "nodes/optimize/optimize.h"
-#include "nodes/quality/quality.h"
-#include "nodes/quality/triangle_tree.h"
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/algorithms/triangle_tree.h"
 #include "tests/helpers/voxel_maps.h"
 
 using namespace polyhex;

@@ -4,7 +4,7 @@
 #include <filesystem>
 
 #include "graph/node.h"
-#include "nodes/io/hexmesh_io.h"
+#include "nodes/formats/hexmesh_io.h"
 #include "tests/helpers/hex_fixtures.h"
 
 using namespace polyhex;

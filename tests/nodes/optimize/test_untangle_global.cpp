@@ -1,9 +1,9 @@
 // Global untangling (§6 optimization): the energy, its gradient, and untangling a folded grid.
 #include <catch2/catch.hpp>
 
-#include "nodes/optimize/hex_corners.h"
+#include "nodes/algorithms/hex_corners.h"
 #include "nodes/optimize/untangle_global.h"
-#include "nodes/quality/quality.h"
+#include "nodes/algorithms/hex_quality.h"
 #include "tests/helpers/voxel_maps.h"
 
 using namespace polyhex;

@@ -3,7 +3,7 @@
 
 #include "nodes/algorithms/rotations.h"
 #include "nodes/orient/orient.h"
-#include "nodes/shapes/shapes.h"
+#include "nodes/algorithms/shapes.h"
 #include "runtime/errors.h"
 #include "tests/helpers/rotations.h"
 

@@ -4,9 +4,9 @@
 
 #include <cmath>
 
-#include "nodes/io/surface_io.h"
-#include "nodes/io/tetmesh_io.h"
-#include "nodes/shapes/shapes.h"
+#include "nodes/formats/surface_io.h"
+#include "nodes/formats/tetmesh_io.h"
+#include "nodes/algorithms/shapes.h"
 #include "tests/helpers/cli.h"
 #include "tests/helpers/report.h"
 #include "tests/helpers/rotations.h"

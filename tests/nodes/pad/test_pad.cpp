@@ -2,7 +2,7 @@
 #include <catch2/catch.hpp>
 
 #include "nodes/pad/pad.h"
-#include "nodes/quality/quality.h"
+#include "nodes/algorithms/hex_quality.h"
 #include "tests/helpers/voxel_maps.h"
 
 using namespace polyhex;

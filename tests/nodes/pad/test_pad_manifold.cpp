@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "nodes/pad/pad.h"
-#include "nodes/quality/quality.h"
+#include "nodes/algorithms/hex_quality.h"
 #include "tests/helpers/hex_fixtures.h"
 
 using namespace polyhex;

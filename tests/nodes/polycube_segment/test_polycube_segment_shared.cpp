@@ -7,7 +7,7 @@
 #include <chrono>
 #include <filesystem>
 
-#include "nodes/io/surface_io.h"
+#include "nodes/formats/surface_io.h"
 #include "nodes/polycube_segment/polycube_segment.h"
 #include "nodes/rotation_deform/rotation_deform.h"
 #include "nodes/tetrahedralize/tetgen.h"

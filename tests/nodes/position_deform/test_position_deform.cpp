@@ -14,7 +14,7 @@
 #include "nodes/polycube_segment/polycube_segment.h"
 #include "nodes/position_deform/position_deform.h"
 #include "nodes/rotation_deform/rotation_deform.h"
-#include "nodes/shapes/shapes.h"
+#include "nodes/algorithms/shapes.h"
 #include "nodes/tetrahedralize/tetgen.h"
 #include "tests/helpers/voxel_shapes.h"
 

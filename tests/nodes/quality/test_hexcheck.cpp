@@ -7,9 +7,9 @@
 #include <unistd.h>
 
 #include "nodes/hex_from_tets/split.h"
-#include "nodes/io/hexmesh_io.h"
-#include "nodes/io/surface_io.h"
-#include "nodes/quality/quality.h"
+#include "nodes/formats/hexmesh_io.h"
+#include "nodes/formats/surface_io.h"
+#include "nodes/algorithms/hex_quality.h"
 #include "nodes/quality/quality_json.h"
 #include "tests/helpers/hex_fixtures.h"
 

@@ -7,9 +7,9 @@
 #include <set>
 
 #include "graph/node.h"
-#include "nodes/quality/quality.h"
+#include "nodes/algorithms/hex_quality.h"
 #include "nodes/quality/quality_json.h"
-#include "nodes/quality/triangle_tree.h"
+#include "nodes/algorithms/triangle_tree.h"
 #include "tests/helpers/hex_fixtures.h"
 
 using namespace polyhex;

@@ -10,8 +10,8 @@
 
 #include "graph/node.h"
 #include "nodes/rotation_deform/rotation_deform.h"
-#include "nodes/io/surface_io.h"
-#include "nodes/shapes/shapes.h"
+#include "nodes/formats/surface_io.h"
+#include "nodes/algorithms/shapes.h"
 #include "nodes/tetrahedralize/tetgen.h"
 #include "runtime/errors.h"
 

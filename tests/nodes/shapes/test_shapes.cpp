@@ -5,7 +5,7 @@
 #include <map>
 
 #include "graph/node.h"
-#include "nodes/shapes/shapes.h"
+#include "nodes/algorithms/shapes.h"
 #include "runtime/errors.h"
 #include "tests/helpers/surface_checks.h"
 

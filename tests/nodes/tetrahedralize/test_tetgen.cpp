@@ -9,7 +9,7 @@
 #include <sstream>
 
 #include "graph/node.h"
-#include "nodes/shapes/shapes.h"
+#include "nodes/algorithms/shapes.h"
 #include "nodes/tetrahedralize/tetgen.h"
 #include "runtime/errors.h"
 #include "tests/helpers/surface_checks.h"

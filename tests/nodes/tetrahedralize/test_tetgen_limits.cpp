@@ -8,7 +8,7 @@
 #include <cmath>
 
 #include "graph/node.h"
-#include "nodes/shapes/shapes.h"
+#include "nodes/algorithms/shapes.h"
 #include "nodes/tetrahedralize/tetgen.h"
 #include "runtime/errors.h"
 

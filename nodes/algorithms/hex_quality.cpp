@@ -1,4 +1,4 @@
-#include "nodes/quality/quality.h"
+#include "nodes/algorithms/hex_quality.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "nodes/artefacts/hex_topology.h"
-#include "nodes/quality/triangle_tree.h"
+#include "nodes/algorithms/triangle_tree.h"
 #include "runtime/errors.h"
 
 namespace polyhex {

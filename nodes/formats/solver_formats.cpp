@@ -1,4 +1,4 @@
-#include "nodes/io/solver_formats.h"
+#include "nodes/formats/solver_formats.h"
 
 #include <exodusII.h>
 
@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "nodes/artefacts/boundary_groups.h"
-#include "nodes/io/mesh_formats.h"
-#include "nodes/io/text_cursor.h"
+#include "nodes/formats/mesh_formats.h"
+#include "nodes/formats/text_cursor.h"
 #include "runtime/atomic_file.h"
 #include "runtime/errors.h"
 

@@ -8,7 +8,7 @@
 #include <numeric>
 #include <stdexcept>
 
-#include "nodes/polycube_segment/chart_order.h"
+#include "nodes/algorithms/chart_order.h"
 #include "nodes/polycube_segment/polycube_segment.h"
 #include "tests/helpers/segment_fixtures.h"
 

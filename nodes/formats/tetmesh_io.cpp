@@ -1,11 +1,11 @@
-#include "nodes/io/tetmesh_io.h"
+#include "nodes/formats/tetmesh_io.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 
-#include "nodes/io/surface_io.h"
-#include "nodes/io/text_cursor.h"
+#include "nodes/formats/surface_io.h"
+#include "nodes/formats/text_cursor.h"
 #include "runtime/errors.h"
 
 namespace polyhex {

@@ -1,4 +1,4 @@
-#include "nodes/io/text_cursor.h"
+#include "nodes/formats/text_cursor.h"
 
 #include <algorithm>
 #include <charconv>

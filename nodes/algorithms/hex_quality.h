@@ -1,4 +1,4 @@
-/// @file quality.h
+/// @file hex_quality.h
 /// @brief Quality of an all-hex mesh, optionally against the surface it should approximate.
 ///
 /// Every figure has exactly the definition of `../shared/tools/hexcheck.py` (the independent

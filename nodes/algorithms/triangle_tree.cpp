@@ -1,4 +1,4 @@
-#include "nodes/quality/triangle_tree.h"
+#include "nodes/algorithms/triangle_tree.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "nodes/optimize/features.h"
+#include "nodes/algorithms/features.h"
 
 #include <algorithm>
 #include <array>

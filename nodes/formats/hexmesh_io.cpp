@@ -1,10 +1,10 @@
-#include "nodes/io/hexmesh_io.h"
+#include "nodes/formats/hexmesh_io.h"
 
 #include <algorithm>
 #include <map>
 
 #include "nodes/artefacts/boundary_groups.h"
-#include "nodes/io/solver_formats.h"
+#include "nodes/formats/solver_formats.h"
 #include "runtime/errors.h"
 
 namespace polyhex {

@@ -1,4 +1,4 @@
-#include "nodes/io/mesh_formats.h"
+#include "nodes/formats/mesh_formats.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 #include <type_traits>
 #include <unordered_map>
 
-#include "nodes/io/text_cursor.h"
+#include "nodes/formats/text_cursor.h"
 #include "runtime/atomic_file.h"
 #include "runtime/errors.h"
 

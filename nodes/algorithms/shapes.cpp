@@ -2,7 +2,7 @@
 /// @brief Built-in closed surfaces: analytic parametrisations (sphere, torus, bumpy torus, box) and
 /// CSG solids given by signed distance functions, sampled into an OpenVDB narrow-band level set and
 /// meshed with openvdb::tools::volumeToMesh (rod with holes, L-block, bent pipe, fandisk-like block).
-#include "nodes/shapes/shapes.h"
+#include "nodes/algorithms/shapes.h"
 
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/SignedFloodFill.h>

@@ -1,4 +1,4 @@
-#include "nodes/polycube_segment/chart_order.h"
+#include "nodes/algorithms/chart_order.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,12 +1,12 @@
-#include "nodes/io/surface_io.h"
+#include "nodes/formats/surface_io.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <numeric>
 
-#include "nodes/io/text_cursor.h"
-#include "nodes/shapes/shapes.h"
+#include "nodes/formats/text_cursor.h"
+#include "nodes/algorithms/shapes.h"
 #include "runtime/errors.h"
 #include "runtime/union_find.h"
 

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "nodes/artefacts/meshes.h"
-#include "nodes/io/mesh_formats.h"
+#include "nodes/formats/mesh_formats.h"
 
 namespace polyhex {
 
