@@ -86,7 +86,9 @@ struct OptimizeParams {
   double shape_tolerance = 3e-4;   ///< the shape sweeps stop when a pair of them raises the average SJ by less, [0, 1]
   double target_sj = 0.8;          ///< max-min sweeps touch vertices with an incident hex below this SJ, [0, 1]
   double shape_target_sj = 0.99;   ///< shape sweeps touch vertices with an incident hex below this SJ, [0, 1]
-  double time_budget = 60.0;       ///< seconds for the whole stage (checked between colour classes), [0, 1e6]
+  double time_budget = 3600.0;     ///< seconds for the whole stage (checked between colour classes), [0, 1e6]: a safety
+                                   ///< net, far above any run measured, since a budget that is hit makes the mesh depend
+                                   ///< on the machine's load; the sweeps' own caps bound the work
   bool move_boundary = true;       ///< boundary vertices may slide on the surface
   bool release_boundary = true;    ///< last resort: boundary corners of hexes still inverted after untangling may leave the surface
   double feature_angle = 40;       ///< if the first result is poor (fallback_below_sj), a second candidate whose boundary vertices
