@@ -410,6 +410,163 @@ SurfaceDiagnosis diagnose_surface(const SurfaceMesh& s, double hex_edge, double 
   return d;
 }
 
+namespace {
+
+/// Whether the surface is remeshed to size.
+bool too_fine(const ConditionParams& p, const SurfaceDiagnosis& d) {
+  return p.remesh == RemeshWhen::always || (p.remesh == RemeshWhen::finer && d.tessellation_ratio > p.remesh_finer_than);
+}
+
+/// One conditioning run: the input, its sizes, the surface being repaired (m) and what was done to it.
+class Conditioner {
+ public:
+  Conditioner(const SurfaceMesh& s, SurfaceRepair repair, const ConditionParams& p, ConditionReport& report, double diag)
+      : s_(s), name_(s.source), repair_(repair), p_(p), report_(report), H_(p.hex_edge_length * diag),
+        T_(p.edge_length * diag), m_(s) {}
+
+  /// The conditioned surface for a defective or too finely tessellated input (condition_surface's
+  /// steps after the diagnosis). \throw InvalidInput as condition_surface documents
+  SurfaceMesh run(const std::vector<std::string>& defects) {
+    if (!defects.empty()) repair_defects(defects);
+    // A wrap is remeshed too: its triangles follow the wrapping, not the size the tets need.
+    if (!report_.remeshed && (defects.empty() || report_.repair == "alpha_wrap" || too_fine(p_, *current_)) && !remesh_to_size())
+      report_.warnings.push_back(name_ + ": remeshing to size leaves crossing triangles down to half the tet "
+                                         "edge: the surface keeps its own tessellation");
+    report_.output = current_ ? *current_ : report_.input;  // no diagnosis: m is still the input
+    if (report_.output.defective())
+      throw InvalidInput(name_ + ": " + (defects.empty() ? std::string("remeshing to size") : join(defects) + ": " + how_) +
+                         (report_.remeshed ? " and remeshing to size" : "") + " leaves " + join(report_.output.defects()));
+    SurfaceReadReport oriented;
+    check_and_repair_surface(m_, name_, oriented);
+    check_thickness(defects);
+    report_cost(defects);
+    return std::move(m_);
+  }
+
+ private:
+  /// Remeshing to size. Triangles of the tet size can cross where two parts of the surface come closer
+  /// than that (a level set's narrow gaps, thin plates): then finer targets, down to half. Returns
+  /// false, leaving m as it was, when every target leaves a defect.
+  bool remesh_to_size() {
+    for (double target = T_; target > T_ / 2.1; target /= std::sqrt(2.0)) {
+      SurfaceMesh r = isotropic_remesh(m_, target, p_.feature_angle, p_.remesh_iterations, report_.feature_edges);
+      throw_if_interrupted();
+      SurfaceDiagnosis d = diagnose_surface(r, H_, T_);
+      if (!d.defective()) {
+        current_ = std::move(d);
+        report_.remesh_edge = target / T_;
+        report_.remeshed = true;
+        m_ = std::move(r);
+        return true;
+      }
+    }
+    return false;
+  }
+
+  /// One repair of the input; true when it leaves a clean surface. A level set is remeshed at once (its
+  /// output is at voxel size and may carry zero-area triangles).
+  bool attempt(SurfaceRepair r) {
+    report_.repair = repair_name(r);
+    report_.remeshed = false;
+    current_.reset();
+    try {
+      if (r == SurfaceRepair::local) {
+        m_ = local_repair(s_, p_.max_hole_perimeter * H_, report_);
+        how_ = "local repair (" + std::to_string(report_.input.degenerate_faces + report_.input.duplicate_faces) +
+               " degenerate or duplicate triangles removed, " + std::to_string(report_.pinches_split) +
+               " pinch vertices split, " + std::to_string(report_.holes_filled) + " holes filled)";
+      } else if (r == SurfaceRepair::levelset) {
+        m_ = levelset_remesh(s_, p_.voxel * H_);
+        how_ = "OpenVDB level set at voxel " + fixed(p_.voxel) + " hex edges";
+        if (!remesh_to_size()) {
+          how_ += ": remeshing it to size leaves crossing triangles down to half the tet edge";
+          return false;
+        }
+      } else {
+        m_ = alpha_wrap(s_, p_.alpha * H_, p_.offset * H_);
+        how_ = "CGAL alpha wrap (alpha " + fixed(p_.alpha) + ", offset " + fixed(p_.offset) + " hex edges)";
+      }
+    } catch (const InvalidInput& e) {
+      how_ = e.what();
+      return false;
+    }
+    throw_if_interrupted();
+    if (!current_) current_ = diagnose_surface(m_, H_, T_);  // the level set's remesh diagnosed it already
+    return !current_->defective();
+  }
+
+  /// The repairs of the variant in turn (auto: local, then the level set for a closed input, then the
+  /// alpha wrap, which also takes what the level set could not mend: it cannot leave crossings) until
+  /// one leaves a clean surface. \throw InvalidInput when none does
+  void repair_defects(const std::vector<std::string>& defects) {
+    std::vector<SurfaceRepair> order = {repair_};
+    if (repair_ == SurfaceRepair::automatic) {
+      order = {SurfaceRepair::local, SurfaceRepair::alpha_wrap};
+      if (report_.input.boundary_edges == 0) order.insert(order.begin() + 1, SurfaceRepair::levelset);
+    }
+    std::vector<std::string> failed;
+    bool clean = false;
+    for (SurfaceRepair r : order) {
+      if ((clean = attempt(r))) break;
+      failed.push_back(report_.repair + ": " + (current_ && current_->defective() ? "leaves " + join(current_->defects()) : how_));
+    }
+    if (!clean)
+      throw InvalidInput(name_ + ": " + join(defects) + "; no repair leaves a clean surface (" + join(failed) + ")" +
+                         (repair_ == SurfaceRepair::automatic ? "" : "; variant condition_surface/auto tries more"));
+    for (const std::string& f : failed) report_.warnings.push_back(name_ + ": tried " + f);
+  }
+
+  /// \throw InvalidInput when the result encloses a solid thinner than min_thickness hex edges
+  void check_thickness(const std::vector<std::string>& defects) const {
+    const double thickness = report_.output.thickness;
+    if (thickness < p_.min_thickness)
+      throw InvalidInput(name_ + ": " + (defects.empty() ? std::string("the surface") : "the " + report_.repair + " repair") +
+                         " encloses a solid thinner than a hex edge (4 volume / area = " + fixed(thickness, 3) +
+                         " hex edges, min_thickness " + fixed(p_.min_thickness) + "): nothing to mesh with hexes");
+  }
+
+  /// How far the result strays from the input, bounded (nothing made up far from it) and reported as
+  /// the warning's cost. The other way is reported only: a union drops the parts of the input inside
+  /// it, and the local repair's fills are bounded by max_hole_perimeter instead.
+  /// \throw InvalidInput beyond max_deviation
+  void report_cost(const std::vector<std::string>& defects) {
+    const SurfaceDistance dist = sampled_surface_distance(s_.V, s_.F, m_.V, m_.F, 20000, 1);
+    report_.deviation_from_original = dist.max_ab / H_;
+    report_.deviation_to_original = dist.max_ba / H_;
+    if (report_.repair != "local" && report_.deviation_to_original > p_.max_deviation)
+      throw InvalidInput(name_ + ": the " + (defects.empty() ? std::string("remeshed") : report_.repair + " repaired") +
+                         " surface strays " + fixed(report_.deviation_to_original) +
+                         " hex edges from the original, more than max_deviation " + fixed(p_.max_deviation));
+    const std::string cost = "the result is within " + fixed(report_.deviation_to_original) +
+                             " hex edges of the original (mean " + fixed(dist.mean_ba / H_, 3) + "), the original within " +
+                             fixed(report_.deviation_from_original) + " of the result (mean " + fixed(dist.mean_ab / H_, 3) +
+                             "); " + std::to_string(s_.F.rows()) + " -> " + std::to_string(m_.F.rows()) + " triangles";
+    if (!defects.empty())
+      report_.warnings.push_back(name_ + ": " + join(defects) + ": repaired by " + how_ +
+                                 (report_.remeshed ? ", then remeshed to " + fixed(report_.remesh_edge) + " tet edges" : "") +
+                                 ": " + cost);
+    else
+      report_.warnings.push_back(name_ + ": tessellation " + fixed(report_.input.tessellation_ratio, 1) +
+                                 " times finer than the tet size: remeshed to " + fixed(report_.remesh_edge) +
+                                 " tet edges (CGAL isotropic remeshing, " + std::to_string(report_.feature_edges) +
+                                 " sharp edges kept): " + cost);
+  }
+
+  const SurfaceMesh& s_;
+  const std::string& name_;
+  const SurfaceRepair repair_;
+  const ConditionParams& p_;
+  ConditionReport& report_;
+  const double H_, T_;  ///< hex and tet edge, absolute
+  SurfaceMesh m_;       ///< the surface as repaired so far
+  std::string how_;     ///< what the last repair did, or why it failed
+  /// The diagnosis of m_ as it stands, when it has one (each runs CGAL's self-intersection test: once
+  /// per mesh).
+  std::optional<SurfaceDiagnosis> current_;
+};
+
+}  // namespace
+
 SurfaceMesh condition_surface(const SurfaceMesh& s, SurfaceRepair repair, const ConditionParams& p,
                               ConditionReport& report) {
   report = ConditionReport{};
@@ -418,137 +575,17 @@ SurfaceMesh condition_surface(const SurfaceMesh& s, SurfaceRepair repair, const 
   if (s.V.rows() == 0) throw InvalidInput(name + ": no vertices");
   const double diag = reference_length(s.V);
   if (!(diag > 0)) throw InvalidInput(name + ": all vertices at one point");
-  const double H = p.hex_edge_length * diag, T = p.edge_length * diag;
-  report.input = diagnose_surface(s, H, T);
+  report.input = diagnose_surface(s, p.hex_edge_length * diag, p.edge_length * diag);
   throw_if_interrupted();
   const std::vector<std::string> defects = report.input.defects();
-  auto too_fine = [&](const SurfaceDiagnosis& d) {
-    return p.remesh == RemeshWhen::always || (p.remesh == RemeshWhen::finer && d.tessellation_ratio > p.remesh_finer_than);
-  };
-  const bool fine = too_fine(report.input);
-  if (defects.empty() && !fine) {
+  if (defects.empty() && !too_fine(p, report.input)) {
     report.output = report.input;
     return s;
   }
   if (!defects.empty() && p.policy == DefectPolicy::strict)
-    throw InvalidInput(name + ": " + join(defects) +
-                       "; refused by policy `strict` (policy `auto` repairs it)");
+    throw InvalidInput(name + ": " + join(defects) + "; refused by policy `strict` (policy `auto` repairs it)");
   report.passed_through = false;
-  // The diagnosis of `m` below as it stands, when it has one (each runs CGAL's self-intersection test:
-  // once per mesh).
-  std::optional<SurfaceDiagnosis> current;
-
-  // Remeshing to size. Triangles of the tet size can cross where two parts of the surface come
-  // closer than that (a level set's narrow gaps, thin plates): then finer targets, down to half.
-  // Returns false, leaving `m` as it was, when every target leaves a defect.
-  auto remesh_to_size = [&](SurfaceMesh& m) {
-    for (double target = T; target > T / 2.1; target /= std::sqrt(2.0)) {
-      SurfaceMesh r = isotropic_remesh(m, target, p.feature_angle, p.remesh_iterations, report.feature_edges);
-      throw_if_interrupted();
-      SurfaceDiagnosis d = diagnose_surface(r, H, T);
-      if (!d.defective()) {
-        current = std::move(d);
-        report.remesh_edge = target / T;
-        report.remeshed = true;
-        m = std::move(r);
-        return true;
-      }
-    }
-    return false;
-  };
-
-  SurfaceMesh m = s;
-  std::string how;
-  if (!defects.empty()) {
-    // One repair; true when it leaves a clean surface. A level set is remeshed at once (its output is
-    // at voxel size and may carry zero-area triangles).
-    auto attempt = [&](SurfaceRepair r) {
-      report.repair = repair_name(r);
-      report.remeshed = false;
-      current.reset();
-      try {
-        if (r == SurfaceRepair::local) {
-          m = local_repair(s, p.max_hole_perimeter * H, report);
-          how = "local repair (" + std::to_string(report.input.degenerate_faces + report.input.duplicate_faces) +
-                " degenerate or duplicate triangles removed, " + std::to_string(report.pinches_split) +
-                " pinch vertices split, " + std::to_string(report.holes_filled) + " holes filled)";
-        } else if (r == SurfaceRepair::levelset) {
-          m = levelset_remesh(s, p.voxel * H);
-          how = "OpenVDB level set at voxel " + fixed(p.voxel) + " hex edges";
-          if (!remesh_to_size(m)) {
-            how += ": remeshing it to size leaves crossing triangles down to half the tet edge";
-            return false;
-          }
-        } else {
-          m = alpha_wrap(s, p.alpha * H, p.offset * H);
-          how = "CGAL alpha wrap (alpha " + fixed(p.alpha) + ", offset " + fixed(p.offset) + " hex edges)";
-        }
-      } catch (const InvalidInput& e) {
-        how = e.what();
-        return false;
-      }
-      throw_if_interrupted();
-      if (!current) current = diagnose_surface(m, H, T);  // the level set's remesh diagnosed it already
-      return !current->defective();
-    };
-    std::vector<SurfaceRepair> order = {repair};
-    if (repair == SurfaceRepair::automatic) {
-      // The alpha wrap also takes what the level set could not mend (it cannot leave crossings).
-      order = {SurfaceRepair::local, SurfaceRepair::alpha_wrap};
-      if (report.input.boundary_edges == 0) order.insert(order.begin() + 1, SurfaceRepair::levelset);
-    }
-    std::vector<std::string> failed;
-    bool clean = false;
-    for (SurfaceRepair r : order) {
-      if ((clean = attempt(r))) break;
-      failed.push_back(report.repair + ": " + (current && current->defective() ? "leaves " + join(current->defects()) : how));
-    }
-    if (!clean)
-      throw InvalidInput(name + ": " + join(defects) + "; no repair leaves a clean surface (" + join(failed) + ")" +
-                         (repair == SurfaceRepair::automatic ? "" : "; variant condition_surface/auto tries more"));
-    for (const std::string& f : failed) report.warnings.push_back(name + ": tried " + f);
-  }
-  // A wrap is remeshed too: its triangles follow the wrapping, not the size the tets need.
-  if (!report.remeshed && (defects.empty() || report.repair == "alpha_wrap" || too_fine(*current)) &&
-      !remesh_to_size(m))
-    report.warnings.push_back(name + ": remeshing to size leaves crossing triangles down to half the tet "
-                                     "edge: the surface keeps its own tessellation");
-  report.output = current ? *current : report.input;  // no diagnosis: m is still the input
-  if (report.output.defective())
-    throw InvalidInput(name + ": " + (defects.empty() ? std::string("remeshing to size") : join(defects) + ": " + how) +
-                       (report.remeshed ? " and remeshing to size" : "") + " leaves " + join(report.output.defects()));
-  SurfaceReadReport oriented;
-  check_and_repair_surface(m, name, oriented);
-
-  const double thickness = report.output.thickness;
-  if (thickness < p.min_thickness)
-    throw InvalidInput(name + ": " + (defects.empty() ? std::string("the surface") : "the " + report.repair + " repair") +
-                       " encloses a solid thinner than a hex edge (4 volume / area = " + fixed(thickness, 3) +
-                       " hex edges, min_thickness " + fixed(p.min_thickness) + "): nothing to mesh with hexes");
-  const SurfaceDistance dist = sampled_surface_distance(s.V, s.F, m.V, m.F, 20000, 1);
-  report.deviation_from_original = dist.max_ab / H;
-  report.deviation_to_original = dist.max_ba / H;
-  // Bounded: how far the result strays from the input (nothing made up far from it). The other way
-  // is reported only: a union drops the parts of the input inside it, and the local repair's fills
-  // are bounded by max_hole_perimeter instead.
-  if (report.repair != "local" && report.deviation_to_original > p.max_deviation)
-    throw InvalidInput(name + ": the " + (defects.empty() ? std::string("remeshed") : report.repair + " repaired") +
-                       " surface strays " + fixed(report.deviation_to_original) +
-                       " hex edges from the original, more than max_deviation " + fixed(p.max_deviation));
-  const std::string cost = "the result is within " + fixed(report.deviation_to_original) +
-                           " hex edges of the original (mean " + fixed(dist.mean_ba / H, 3) + "), the original within " +
-                           fixed(report.deviation_from_original) + " of the result (mean " + fixed(dist.mean_ab / H, 3) +
-                           "); " + std::to_string(s.F.rows()) + " -> " + std::to_string(m.F.rows()) + " triangles";
-  if (!defects.empty())
-    report.warnings.push_back(name + ": " + join(defects) + ": repaired by " + how +
-                              (report.remeshed ? ", then remeshed to " + fixed(report.remesh_edge) + " tet edges" : "") + ": " +
-                              cost);
-  else
-    report.warnings.push_back(name + ": tessellation " + fixed(report.input.tessellation_ratio, 1) +
-                              " times finer than the tet size: remeshed to " + fixed(report.remesh_edge) +
-                              " tet edges (CGAL isotropic remeshing, " +
-                              std::to_string(report.feature_edges) + " sharp edges kept): " + cost);
-  return m;
+  return Conditioner(s, repair, p, report, diag).run(defects);
 }
 
 }  // namespace polyhex
