@@ -1,5 +1,7 @@
 #include "graph/cache.h"
 
+#include "runtime/atomic_file.h"
+
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -8,8 +10,6 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
-
-#include "runtime/atomic_file.h"
 
 namespace polyhex {
 
@@ -121,8 +121,10 @@ struct EntryCursor {
 std::string file_stem_of(const std::string& node_type) {
   std::string s = node_type;
   for (char& c : s) {
-    if (c == '/') c = '.';
-    else if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-' && c != '.') c = '_';
+    if (c == '/')
+      c = '.';
+    else if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-' && c != '.')
+      c = '_';
   }
   return s;
 }
@@ -208,7 +210,7 @@ std::string canonical_json(const json& j) {
     const double x = j.get<double>();
     if (std::isfinite(x) && x == std::floor(x) && std::fabs(x) < 9007199254740992.0)
       return std::to_string(static_cast<long long>(x));  // 2, 2.0, -0.0 -> "2", "0"
-    return json(x).dump();                                // shortest round-trip decimal
+    return json(x).dump();                               // shortest round-trip decimal
   }
   return j.dump();
 }
@@ -230,14 +232,21 @@ std::uintmax_t parse_size(const std::string& text) {
   }
   std::string unit = text.substr(used);
   for (char& c : unit) c = char(std::toupper(static_cast<unsigned char>(c)));
-  if (ends_with(unit, "IB")) unit.resize(unit.size() - 2);
-  else if (unit.size() == 2 && unit[1] == 'B') unit.resize(1);
+  if (ends_with(unit, "IB"))
+    unit.resize(unit.size() - 2);
+  else if (unit.size() == 2 && unit[1] == 'B')
+    unit.resize(1);
   double scale = 1;
-  if (unit == "K") scale = 1024.0;
-  else if (unit == "M") scale = 1024.0 * 1024;
-  else if (unit == "G") scale = 1024.0 * 1024 * 1024;
-  else if (unit == "T") scale = 1024.0 * 1024 * 1024 * 1024;
-  else if (!unit.empty() && unit != "B") throw ConfigError(bad);
+  if (unit == "K")
+    scale = 1024.0;
+  else if (unit == "M")
+    scale = 1024.0 * 1024;
+  else if (unit == "G")
+    scale = 1024.0 * 1024 * 1024;
+  else if (unit == "T")
+    scale = 1024.0 * 1024 * 1024 * 1024;
+  else if (!unit.empty() && unit != "B")
+    throw ConfigError(bad);
   if (!std::isfinite(x) || x < 0) throw ConfigError(bad);
   return std::uintmax_t(std::llround(x * scale));
 }
@@ -284,13 +293,15 @@ CacheLookup ArtefactCache::load(const std::string& node_type, const std::string&
   if (read_failed) return invalid("read failed");
   const size_t magic_len = std::strlen(kEntryMagic);
   if (bytes.size() < magic_len + 8 || bytes.compare(0, magic_len, kEntryMagic) != 0)
-    return invalid(bytes.size() < magic_len ? "truncated (" + std::to_string(bytes.size()) + " bytes)" : "not a cache entry (bad magic)");
+    return invalid(bytes.size() < magic_len ? "truncated (" + std::to_string(bytes.size()) + " bytes)"
+                                            : "not a cache entry (bad magic)");
   EntryCursor c{bytes, magic_len, bytes.size()};
   std::uint32_t format = 0, codec_version = 0;
   c.u32(format);
   c.u32(codec_version);
   if (format != kEntryFormatVersion)
-    return invalid("entry format version " + std::to_string(format) + ", expected " + std::to_string(kEntryFormatVersion));
+    return invalid("entry format version " + std::to_string(format) + ", expected " +
+                   std::to_string(kEntryFormatVersion));
   if (bytes.size() < c.pos + 8) return invalid("truncated (" + std::to_string(bytes.size()) + " bytes)");
   c.end = bytes.size() - 8;
   std::uint64_t stored_sum = 0;
@@ -324,13 +335,14 @@ CacheLookup ArtefactCache::load(const std::string& node_type, const std::string&
   return r;
 }
 
-std::string ArtefactCache::store(const std::string& node_type, const std::string& key, const Artefact& a, const json& metrics,
-                                 const std::vector<std::string>& warnings) const {
+std::string ArtefactCache::store(const std::string& node_type, const std::string& key, const Artefact& a,
+                                 const json& metrics, const std::vector<std::string>& warnings) const {
   const ArtefactCodec* codec = Registry::instance().codec(a.type);
   if (!a || !codec) throw Error("artefact cache: cannot store a " + (a ? a.type : std::string("missing artefact")));
   std::error_code ec;
   fs::create_directories(dir_, ec);
-  if (!fs::is_directory(dir_)) throw IOError(dir_.string() + ": cannot create the cache folder" + (ec ? ": " + ec.message() : ""));
+  if (!fs::is_directory(dir_))
+    throw IOError(dir_.string() + ": cannot create the cache folder" + (ec ? ": " + ec.message() : ""));
   std::ostringstream payload(std::ios::binary);
   codec->write(a, payload);
   json meta{{"node_type", node_type}, {"metrics", metrics}, {"warnings", warnings}};
@@ -342,8 +354,9 @@ std::string ArtefactCache::store(const std::string& node_type, const std::string
   const std::string body = payload.str();
   put_block(bytes, body);
   put_u64(bytes, fnv1a64(bytes.data(), bytes.size()));
-  write_file_atomic(entry_path(node_type, key), [&](std::ostream& out) { out.write(bytes.data(), std::streamsize(bytes.size())); },
-                    /*binary=*/true);
+  write_file_atomic(
+      entry_path(node_type, key), [&](std::ostream& out) { out.write(bytes.data(), std::streamsize(bytes.size())); },
+      /*binary=*/true);
   return fnv1a128_hex(body);
 }
 
@@ -382,9 +395,8 @@ ArtefactCache::PruneResult ArtefactCache::prune(std::uintmax_t max_bytes) const 
     r.remaining += l.bytes;
     entries.push_back(std::move(l));
   }
-  std::sort(entries.begin(), entries.end(), [](const Listed& a, const Listed& b) {
-    return a.mtime != b.mtime ? a.mtime < b.mtime : a.path < b.path;
-  });
+  std::sort(entries.begin(), entries.end(),
+            [](const Listed& a, const Listed& b) { return a.mtime != b.mtime ? a.mtime < b.mtime : a.path < b.path; });
   for (const Listed& l : entries) {
     if (r.remaining <= max_bytes) break;
     remove_quietly(l.path);

@@ -33,13 +33,13 @@
 /// removes the least recently used entries first.
 #pragma once
 
+#include "graph/node.h"
+
 #include <cstdint>
 #include <filesystem>
 #include <map>
 #include <string>
 #include <vector>
-
-#include "graph/node.h"
 
 namespace polyhex {
 
@@ -73,11 +73,11 @@ std::string node_key(const NodeSpec& spec, const json& params, const std::vector
 struct CacheLookup {
   enum class Status { miss, hit, invalid };
   Status status = Status::miss;
-  Artefact artefact;                   ///< the artefact on a hit
-  json metrics = json::object();       ///< the node's metrics when it was computed
-  std::vector<std::string> warnings;   ///< the node's warnings when it was computed
-  std::string problem;                 ///< why an entry is invalid
-  std::string digest;                  ///< on a hit: FNV-1a 128 (hex) of the payload (what store returned)
+  Artefact artefact;                  ///< the artefact on a hit
+  json metrics = json::object();      ///< the node's metrics when it was computed
+  std::vector<std::string> warnings;  ///< the node's warnings when it was computed
+  std::string problem;                ///< why an entry is invalid
+  std::string digest;                 ///< on a hit: FNV-1a 128 (hex) of the payload (what store returned)
 };
 
 /// Totals of a cache folder.

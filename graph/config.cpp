@@ -1,12 +1,12 @@
 #include "graph/config.h"
 
+#include "runtime/errors.h"
+
 #include <fstream>
 #include <functional>
 #include <regex>
 #include <set>
 #include <sstream>
-
-#include "runtime/errors.h"
 
 namespace polyhex {
 
@@ -74,8 +74,8 @@ json resolve_value(const json& j, const json& vars, const std::string& where) {
     if (!vars.contains(name)) {
       std::string names;
       for (auto it = vars.begin(); it != vars.end(); ++it) names += (names.empty() ? "" : ", ") + it.key();
-      throw ConfigError(where + ": `${" + name + "}` is not a var of the config; vars: " +
-                        (names.empty() ? "(none)" : names));
+      throw ConfigError(where + ": `${" + name +
+                        "}` is not a var of the config; vars: " + (names.empty() ? "(none)" : names));
     }
     return vars[name];
   };
@@ -115,7 +115,8 @@ json evaluate_vars(const json& vars, const std::string& source) {
       if (!std::regex_search(rest, m, term, std::regex_constants::match_continuous))
         throw ConfigError(where + ": `" + s + "` is not a product of numbers and ${var}s (like \"2 * ${hex_edge}\")");
       if (m[2].matched) {
-        if (!vars.contains(m[2].str())) throw ConfigError(where + ": `${" + m[2].str() + "}` is not a var of the config");
+        if (!vars.contains(m[2].str()))
+          throw ConfigError(where + ": `${" + m[2].str() + "}` is not a var of the config");
         const json f = value(m[2].str());
         if (!f.is_number()) throw ConfigError(where + ": `${" + m[2].str() + "}` is not a number (" + f.dump() + ")");
         product *= f.get<double>();
@@ -124,7 +125,8 @@ json evaluate_vars(const json& vars, const std::string& source) {
       }
       pos += size_t(m.length(0));
       if (pos == s.size()) break;
-      if (s[pos] != '*') throw ConfigError(where + ": `" + s + "` is not a product of numbers and ${var}s (like \"2 * ${hex_edge}\")");
+      if (s[pos] != '*')
+        throw ConfigError(where + ": `" + s + "` is not a product of numbers and ${var}s (like \"2 * ${hex_edge}\")");
       ++pos;
     }
     state[name] = 2;
@@ -157,10 +159,14 @@ json expand_branches(const json& j, const std::string& source, std::vector<int>&
     if (n.is_object() && n.contains("id") && n["id"].is_string()) ids.insert(n["id"].get<std::string>());
   for (const json& id : b["nodes"]) {
     if (!id.is_string()) throw ConfigError(where + ".nodes: a non-empty array of node ids");
-    if (!ids.count(id.get<std::string>())) throw ConfigError(where + ".nodes: no node with id `" + id.get<std::string>() + "`");
-    if (!listed.insert(id.get<std::string>()).second) throw ConfigError(where + ".nodes: `" + id.get<std::string>() + "` listed twice");
+    if (!ids.count(id.get<std::string>()))
+      throw ConfigError(where + ".nodes: no node with id `" + id.get<std::string>() + "`");
+    if (!listed.insert(id.get<std::string>()).second)
+      throw ConfigError(where + ".nodes: `" + id.get<std::string>() + "` listed twice");
   }
-  auto is_listed = [&](const json& n) { return n.is_object() && n.contains("id") && n["id"].is_string() && listed.count(n["id"].get<std::string>()); };
+  auto is_listed = [&](const json& n) {
+    return n.is_object() && n.contains("id") && n["id"].is_string() && listed.count(n["id"].get<std::string>());
+  };
   json out = json::array();
   std::vector<int> of;
   bool placed = false;
@@ -169,9 +175,10 @@ json expand_branches(const json& j, const std::string& source, std::vector<int>&
       if (n.is_object() && n.contains("inputs") && (n["inputs"].is_object() || n["inputs"].is_array()))
         for (const json& from : n["inputs"])
           if (from.is_string() && listed.count(from.get<std::string>()))
-            throw ConfigError(source + ": node `" + n.value("id", std::string("?")) + "`: input `" + from.get<std::string>() +
-                              "` is a branch node: name one copy, `" + from.get<std::string>() + "#1` to `" +
-                              from.get<std::string>() + "#" + std::to_string(count) + "`");
+            throw ConfigError(source + ": node `" + n.value("id", std::string("?")) + "`: input `" +
+                              from.get<std::string>() + "` is a branch node: name one copy, `" +
+                              from.get<std::string>() + "#1` to `" + from.get<std::string>() + "#" +
+                              std::to_string(count) + "`");
       out.push_back(n);
       of.push_back(0);
       continue;
@@ -185,7 +192,8 @@ json expand_branches(const json& j, const std::string& source, std::vector<int>&
         c["id"] = m["id"].get<std::string>() + "#" + std::to_string(k);
         if (c.contains("inputs") && (c["inputs"].is_object() || c["inputs"].is_array()))
           for (json& from : c["inputs"])
-            if (from.is_string() && listed.count(from.get<std::string>())) from = from.get<std::string>() + "#" + std::to_string(k);
+            if (from.is_string() && listed.count(from.get<std::string>()))
+              from = from.get<std::string>() + "#" + std::to_string(k);
         out.push_back(c);
         of.push_back(k);
       }
@@ -222,7 +230,8 @@ PipelineConfig parse_config(const json& j, const std::string& source) {
   if (!j.contains("nodes") || !j["nodes"].is_array() || j["nodes"].empty())
     throw ConfigError(source + ": `nodes` must be a non-empty array");
   if (j.contains("branches") && vars.contains("branch"))
-    throw ConfigError(source + ": vars: `branch` is reserved in a config with branches (`${branch}` is the copy's number)");
+    throw ConfigError(source +
+                      ": vars: `branch` is reserved in a config with branches (`${branch}` is the copy's number)");
   std::vector<int> branch_of;
   const json nodes = expand_branches(j, source, branch_of);
   std::set<std::string> ids;

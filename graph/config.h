@@ -30,8 +30,8 @@ using json = nlohmann::json;
 
 /// One node as written in a config.
 struct NodeConfig {
-  std::string id;     ///< unique name, [A-Za-z0-9_-]+
-  std::string type;   ///< "stage" or "stage/variant"
+  std::string id;    ///< unique name, [A-Za-z0-9_-]+
+  std::string type;  ///< "stage" or "stage/variant"
   json params = json::object();
   /// port name -> id of the producing node. A config may give `inputs` as an object
   /// {"port": "id"} or as an array of ids in port order (resolved against the node spec).

@@ -22,10 +22,15 @@
 /// @endcode
 #pragma once
 
+#include "nodes/artefacts/meshes.h"
+#include "runtime/cancel.h"
+#include "runtime/errors.h"
+#include "runtime/progress.h"
+
 #include <nlohmann/json.hpp>
 
-#include <filesystem>
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <iosfwd>
 #include <map>
@@ -34,11 +39,6 @@
 #include <string>
 #include <type_traits>
 #include <vector>
-
-#include "nodes/artefacts/meshes.h"
-#include "runtime/cancel.h"
-#include "runtime/errors.h"
-#include "runtime/progress.h"
 
 namespace polyhex {
 
@@ -51,17 +51,28 @@ using json = nlohmann::json;
 /// Specialise ArtefactName for every artefact type that flows through the graph.
 template <class T>
 struct ArtefactName;
-template <> struct ArtefactName<SurfaceMesh> { static constexpr const char* value = "SurfaceMesh"; };
-template <> struct ArtefactName<TetMesh> { static constexpr const char* value = "TetMesh"; };
-template <> struct ArtefactName<HexMesh> { static constexpr const char* value = "HexMesh"; };
+template <>
+struct ArtefactName<SurfaceMesh> {
+  static constexpr const char* value = "SurfaceMesh";
+};
+template <>
+struct ArtefactName<TetMesh> {
+  static constexpr const char* value = "TetMesh";
+};
+template <>
+struct ArtefactName<HexMesh> {
+  static constexpr const char* value = "HexMesh";
+};
 
 template <class T>
-std::string artefact_name() { return ArtefactName<T>::value; }
+std::string artefact_name() {
+  return ArtefactName<T>::value;
+}
 
 /// A type-erased, immutable artefact: its type name and the shared data.
 struct Artefact {
-  std::string type;                   ///< ArtefactName of the data, "" for none (sink nodes)
-  std::shared_ptr<const void> data;   ///< the data, null for none
+  std::string type;                  ///< ArtefactName of the data, "" for none (sink nodes)
+  std::shared_ptr<const void> data;  ///< the data, null for none
 
   /// \pre type == artefact_name<T>()   \throw Error when the type does not match
   template <class T>
@@ -74,7 +85,9 @@ struct Artefact {
 };
 
 template <class T>
-Artefact make_artefact(std::shared_ptr<const T> p) { return Artefact{ArtefactName<T>::value, std::move(p)}; }
+Artefact make_artefact(std::shared_ptr<const T> p) {
+  return Artefact{ArtefactName<T>::value, std::move(p)};
+}
 template <class T>
 Artefact make_artefact(T&& value) {
   using U = std::decay_t<T>;
@@ -99,13 +112,13 @@ struct Inputs {
 /// What a node body may touch besides its inputs: metrics and warnings for the report, the output
 /// folder (for nodes that write files or intermediate artefacts), progress.
 struct NodeContext {
-  std::string id;                       ///< node id from the config
-  std::string type;                     ///< full type, "stage/variant"
-  std::filesystem::path out_dir;        ///< output folder of the run (exists)
-  bool save_all = false;                ///< --save-all: nodes may also write intermediate meshes
-  json metrics = json::object();        ///< node-specific figures, copied into report.json
-  std::vector<std::string> warnings;    ///< repairs and fallbacks, copied into report.json
-  ProgressFn on_progress;               ///< may be empty
+  std::string id;                     ///< node id from the config
+  std::string type;                   ///< full type, "stage/variant"
+  std::filesystem::path out_dir;      ///< output folder of the run (exists)
+  bool save_all = false;              ///< --save-all: nodes may also write intermediate meshes
+  json metrics = json::object();      ///< node-specific figures, copied into report.json
+  std::vector<std::string> warnings;  ///< repairs and fallbacks, copied into report.json
+  ProgressFn on_progress;             ///< may be empty
   /// Set by a node whose output is in another frame than its inputs (NodeSpec::frame_role enters):
   /// x -> frame x. --save-all turns the outputs of it and of everything downstream of it back.
   std::optional<Eigen::Matrix3d> frame;
@@ -133,11 +146,11 @@ struct NodeContext {
 /// Description of one parameter, for validation, `--help`, DOT and the README.
 struct ParamInfo {
   std::string name;
-  std::string kind;                 ///< "number", "integer", "boolean", "string"
+  std::string kind;  ///< "number", "integer", "boolean", "string"
   json default_value;
   std::string doc;
-  std::optional<double> lo, hi;     ///< inclusive numeric range
-  std::vector<std::string> choices; ///< allowed strings, empty = any
+  std::optional<double> lo, hi;      ///< inclusive numeric range
+  std::vector<std::string> choices;  ///< allowed strings, empty = any
 };
 
 /// Declares the fields of a params struct P by name: the same names are the JSON keys, the
@@ -146,8 +159,8 @@ template <class P>
 class ParamSet {
  public:
   template <class F>
-  ParamSet& add(const std::string& name, F P::*member, const std::string& doc,
-                std::optional<double> lo = std::nullopt, std::optional<double> hi = std::nullopt) {
+  ParamSet& add(const std::string& name, F P::*member, const std::string& doc, std::optional<double> lo = std::nullopt,
+                std::optional<double> hi = std::nullopt) {
     static_assert(std::is_same_v<F, double> || std::is_same_v<F, int> || std::is_same_v<F, bool> ||
                       std::is_same_v<F, std::string>,
                   "params are double, int, bool or std::string");
@@ -285,10 +298,10 @@ struct PortSpec {
 
 /// Everything the graph builder needs to know about a node type.
 struct NodeSpec {
-  std::string type;                 ///< "stage/variant"
+  std::string type;  ///< "stage/variant"
   std::string doc;
   std::vector<PortSpec> inputs;
-  std::string output;               ///< ArtefactName produced, "" for a sink
+  std::string output;  ///< ArtefactName produced, "" for a sink
   std::vector<ParamInfo> params;
   /// Validate params JSON, return the canonical JSON (all keys). \throw ConfigError
   std::function<json(const json& params, const std::string& where)> check_params;

@@ -1,5 +1,8 @@
 #include "graph/pipeline.h"
 
+#include "graph/cache.h"
+#include "runtime/atomic_file.h"
+
 #include <oneapi/tbb/flow_graph.h>
 #include <oneapi/tbb/global_control.h>
 #include <oneapi/tbb/task_arena.h>
@@ -9,9 +12,6 @@
 #include <map>
 #include <mutex>
 #include <sstream>
-
-#include "graph/cache.h"
-#include "runtime/atomic_file.h"
 
 namespace polyhex {
 
@@ -41,15 +41,16 @@ bool writes_side_files(const ResolvedNode& n, bool save_all) {
 /// Where --save-all writes node `id`'s artefact: OUT/<id><ext>, or OUT/<id>.node<ext> when a node of the
 /// graph names that file in its `path` param (a writer's output, e.g. node `hex` and `write` -> hex.vtk,
 /// or a reader's input), so a saved artefact never replaces a file the config asks for.
-std::filesystem::path save_all_path(const std::vector<ResolvedNode>& nodes, const std::string& id, const std::string& ext,
-                                    const std::filesystem::path& out_dir) {
+std::filesystem::path save_all_path(const std::vector<ResolvedNode>& nodes, const std::string& id,
+                                    const std::string& ext, const std::filesystem::path& out_dir) {
   namespace fs = std::filesystem;
   const fs::path plain = (out_dir / (id + ext)).lexically_normal();
   for (const auto& n : nodes) {
     const auto it = n.params.find("path");
     if (it == n.params.end() || !it->is_string()) continue;
     const fs::path p = it->get<std::string>();
-    if ((out_dir / p).lexically_normal() == plain || p.lexically_normal() == plain) return out_dir / (id + ".node" + ext);
+    if ((out_dir / p).lexically_normal() == plain || p.lexically_normal() == plain)
+      return out_dir / (id + ".node" + ext);
   }
   return out_dir / (id + ext);
 }
@@ -93,7 +94,8 @@ Pipeline Pipeline::build(const PipelineConfig& cfg) {
   for (const NodeConfig& nc : cfg.nodes) {
     const std::string where = cfg.source + ": node `" + nc.id + "` (`" + nc.type + "`)";
     const NodeSpec* spec = reg.find(nc.type);
-    if (!spec) throw ConfigError(where + ": unknown node type `" + nc.type + "`; registered types: " + join(reg.types()));
+    if (!spec)
+      throw ConfigError(where + ": unknown node type `" + nc.type + "`; registered types: " + join(reg.types()));
     ResolvedNode rn;
     rn.id = nc.id;
     rn.branch = nc.branch;
@@ -102,12 +104,14 @@ Pipeline Pipeline::build(const PipelineConfig& cfg) {
     rn.input_nodes.assign(spec->inputs.size(), -1);
     auto bind = [&](size_t port, const std::string& from) {
       auto it = index.find(from);
-      if (it == index.end()) throw ConfigError(where + ": input `" + spec->inputs[port].name + "` names unknown node `" + from + "`");
+      if (it == index.end())
+        throw ConfigError(where + ": input `" + spec->inputs[port].name + "` names unknown node `" + from + "`");
       rn.input_nodes[port] = it->second;
     };
     if (nc.inputs.is_array()) {
       if (nc.inputs.size() > spec->inputs.size())
-        throw ConfigError(where + ": " + std::to_string(nc.inputs.size()) + " inputs given, ports: " + port_list(*spec));
+        throw ConfigError(where + ": " + std::to_string(nc.inputs.size()) +
+                          " inputs given, ports: " + port_list(*spec));
       for (size_t k = 0; k < nc.inputs.size(); ++k) bind(k, nc.inputs[k].get<std::string>());
     } else {
       for (auto it = nc.inputs.begin(); it != nc.inputs.end(); ++it) {
@@ -122,15 +126,18 @@ Pipeline Pipeline::build(const PipelineConfig& cfg) {
     for (size_t k = 0; k < spec->inputs.size(); ++k) {
       const PortSpec& port = spec->inputs[k];
       if (rn.input_nodes[k] < 0) {
-        if (!port.optional) throw ConfigError(where + ": required input `" + port.name + "` (" + port.artefact_type + ") is not connected");
+        if (!port.optional)
+          throw ConfigError(where + ": required input `" + port.name + "` (" + port.artefact_type +
+                            ") is not connected");
         continue;
       }
       const NodeConfig& from = cfg.nodes[rn.input_nodes[k]];
       const NodeSpec* fs = reg.find(from.type);
       if (!fs) continue;  // reported when that node is resolved
       if (fs->output != port.artefact_type)
-        throw ConfigError(where + ": input `" + port.name + "` expects " + port.artefact_type + " but node `" + from.id +
-                          "` (`" + fs->type + "`) produces " + (fs->output.empty() ? std::string("nothing") : fs->output));
+        throw ConfigError(where + ": input `" + port.name + "` expects " + port.artefact_type + " but node `" +
+                          from.id + "` (`" + fs->type + "`) produces " +
+                          (fs->output.empty() ? std::string("nothing") : fs->output));
     }
     p.nodes_.push_back(std::move(rn));
   }
@@ -146,7 +153,8 @@ Pipeline Pipeline::build(const PipelineConfig& cfg) {
         std::string cyc;
         auto it = std::find(stack.begin(), stack.end(), u);
         for (; it != stack.end(); ++it) cyc += "`" + p.nodes_[*it].id + "` <- ";
-        throw ConfigError(cfg.source + ": node `" + p.nodes_[u].id + "`: the inputs form a cycle: " + cyc + "`" + p.nodes_[u].id + "`");
+        throw ConfigError(cfg.source + ": node `" + p.nodes_[u].id + "`: the inputs form a cycle: " + cyc + "`" +
+                          p.nodes_[u].id + "`");
       }
       if (colour[u] == 0) visit(u);
     }
@@ -193,8 +201,13 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 class NodeRunner {
  public:
   NodeRunner(const std::vector<ResolvedNode>& nodes, const RunOptions& opt, RunResult& result)
-      : nodes_(nodes), opt_(opt), result_(result), outputs_(nodes.size()), identity_(nodes.size()),
-        keys_(nodes.size()), frame_(nodes.size()) {}
+      : nodes_(nodes),
+        opt_(opt),
+        result_(result),
+        outputs_(nodes.size()),
+        identity_(nodes.size()),
+        keys_(nodes.size()),
+        frame_(nodes.size()) {}
 
   /// Sets up the artefact cache (opt.cache_dir) and the nodes' keys. \throw what ArtefactCache throws
   void open_cache(std::vector<std::string> keys) {
@@ -219,8 +232,8 @@ class NodeRunner {
     rec.cache_key = key;
     if (!key.empty()) identity_[i] = "k:" + key;  // replaced by the content digest below when there is one
     // The cache: sinks always run; outputs without a codec are not cached.
-    const bool cacheable = cache_ && !key.empty() && !n.spec->output.empty() &&
-                           Registry::instance().codec(n.spec->output) != nullptr;
+    const bool cacheable =
+        cache_ && !key.empty() && !n.spec->output.empty() && Registry::instance().codec(n.spec->output) != nullptr;
     std::vector<std::string> cache_warnings;
     if (cacheable && !writes_side_files(n, opt_.save_all) && load_cached(i, key, t0, cache_warnings)) return;
     NodeContext ctx = context_of(i);
@@ -272,7 +285,8 @@ class NodeRunner {
   bool load_cached(size_t i, const std::string& key, Clock::time_point t0, std::vector<std::string>& warnings) {
     const ResolvedNode& n = nodes_[i];
     CacheLookup hit = cache_->load(n.spec->type, key, n.spec->output);
-    if (hit.status == CacheLookup::Status::invalid) warnings.push_back("cache: ignored entry " + hit.problem + "; recomputed");
+    if (hit.status == CacheLookup::Status::invalid)
+      warnings.push_back("cache: ignored entry " + hit.problem + "; recomputed");
     if (hit.status != CacheLookup::Status::hit) return false;
     NodeRecord& rec = result_.nodes[i];
     outputs_[i] = std::move(hit.artefact);
@@ -371,7 +385,8 @@ class NodeRunner {
 
 /// Runs body(i) for every node as a tbb::flow::continue_node wired along the inputs, on `threads`
 /// threads; an exception ends the graph and its message is returned ("" when none).
-std::string run_flow_graph(const std::vector<ResolvedNode>& nodes, int threads, const std::function<void(size_t)>& body) {
+std::string run_flow_graph(const std::vector<ResolvedNode>& nodes, int threads,
+                           const std::function<void(size_t)>& body) {
   namespace flow = oneapi::tbb::flow;
   std::string error;
   oneapi::tbb::global_control limit(oneapi::tbb::global_control::max_allowed_parallelism, size_t(threads));
@@ -381,8 +396,8 @@ std::string run_flow_graph(const std::vector<ResolvedNode>& nodes, int threads, 
     flow::broadcast_node<flow::continue_msg> start(g);
     std::vector<std::unique_ptr<flow::continue_node<flow::continue_msg>>> fnodes;
     for (size_t i = 0; i < nodes.size(); ++i)
-      fnodes.push_back(std::make_unique<flow::continue_node<flow::continue_msg>>(
-          g, [&, i](const flow::continue_msg&) { body(i); }));
+      fnodes.push_back(
+          std::make_unique<flow::continue_node<flow::continue_msg>>(g, [&, i](const flow::continue_msg&) { body(i); }));
     for (size_t i = 0; i < nodes.size(); ++i) {
       bool has_pred = false;
       for (int u : nodes[i].input_nodes)

@@ -11,43 +11,43 @@
 /// that branch is dropped, reported as `branch_error`, and the others go on.
 #pragma once
 
+#include "graph/config.h"
+#include "graph/node.h"
+
 #include <filesystem>
 #include <functional>
 #include <string>
 #include <vector>
-
-#include "graph/config.h"
-#include "graph/node.h"
 
 namespace polyhex {
 
 struct ResolvedNode {
   std::string id;
   const NodeSpec* spec = nullptr;
-  json params;                  ///< canonical params (every key, defaults filled)
-  std::vector<int> input_nodes; ///< per port of spec->inputs, index of the producing node or -1
-  int branch = 0;               ///< NodeConfig::branch: a copy of the config's `branches`, or 0
+  json params;                   ///< canonical params (every key, defaults filled)
+  std::vector<int> input_nodes;  ///< per port of spec->inputs, index of the producing node or -1
+  int branch = 0;                ///< NodeConfig::branch: a copy of the config's `branches`, or 0
 };
 
 /// What happened to one node in a run.
 struct NodeRecord {
   std::string id, type;
   double seconds = 0;
-  bool cache_hit = false;        ///< the output, metrics and warnings were loaded from the artefact cache
-  bool ran = false;              ///< the node completed (computed, or loaded from the cache)
-  bool skipped = false;          ///< not run: a required input came from a node that produced nothing (NodeSpec::may_skip)
+  bool cache_hit = false;  ///< the output, metrics and warnings were loaded from the artefact cache
+  bool ran = false;        ///< the node completed (computed, or loaded from the cache)
+  bool skipped = false;    ///< not run: a required input came from a node that produced nothing (NodeSpec::may_skip)
   /// A node of a branch (config `branches`) that threw: its branch is dropped (its dependants are
   /// skipped) and the run goes on with the other branches; the message is here and in the report.
   std::string branch_error;
-  std::string cache_key;         ///< the key its output was looked up and stored under ("" when not cached)
+  std::string cache_key;  ///< the key its output was looked up and stored under ("" when not cached)
   json metrics = json::object();
   std::vector<std::string> warnings;
 };
 
 struct RunOptions {
   std::filesystem::path out_dir = "polyhex-out";
-  bool save_all = false;   ///< also write every mesh artefact as OUT/<id>.<ext>
-  int threads = 0;         ///< 0 = all cores
+  bool save_all = false;  ///< also write every mesh artefact as OUT/<id>.<ext>
+  int threads = 0;        ///< 0 = all cores
   /// Artefact cache folder (graph/cache.h); empty = no cache (every node runs). A node whose key is in
   /// the cache is skipped: its output, metrics and warnings are loaded. Sinks always run, and so does
   /// every node under save_all or with a true `save_*` param (they write files). A bad entry is ignored
@@ -64,13 +64,13 @@ struct RunOptions {
 struct RunResult {
   std::vector<NodeRecord> nodes;  ///< in config order
   double seconds = 0;
-  std::string error;              ///< empty when the run succeeded
-  bool interrupted = false;       ///< stopped by SIGINT/SIGTERM (error says where)
-  json retry;                     ///< the config's retry attempts (tools/cli_run.h); null when it has none
+  std::string error;         ///< empty when the run succeeded
+  bool interrupted = false;  ///< stopped by SIGINT/SIGTERM (error says where)
+  json retry;                ///< the config's retry attempts (tools/cli_run.h); null when it has none
   /// "ok", "interrupted" or "error"
   std::string status() const { return error.empty() ? "ok" : interrupted ? "interrupted" : "error"; }
-  /// report.json: {polyhex_version, status, error?, seconds, nodes: {id: {type, ran, skipped?, seconds, cache_hit, metrics,
-  /// warnings}}, retry?}
+  /// report.json: {polyhex_version, status, error?, seconds, nodes: {id: {type, ran, skipped?, seconds, cache_hit,
+  /// metrics, warnings}}, retry?}
   json report() const;
 };
 

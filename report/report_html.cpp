@@ -1,5 +1,11 @@
 #include "report/report_html.h"
 
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/artefacts/hex_topology.h"
+#include "nodes/formats/hexmesh_io.h"
+#include "runtime/atomic_file.h"
+#include "runtime/errors.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -9,12 +15,6 @@
 #include <numeric>
 #include <sstream>
 #include <vector>
-
-#include "nodes/artefacts/hex_topology.h"
-#include "nodes/formats/hexmesh_io.h"
-#include "nodes/algorithms/hex_quality.h"
-#include "runtime/atomic_file.h"
-#include "runtime/errors.h"
 
 namespace polyhex {
 
@@ -116,8 +116,8 @@ json figures(const json& metrics, double min_sj, const std::string& min_sj_from)
         f["pass"] = std::string(op) == ">=" ? v >= limit : v == limit;
       }
     };
-    if (key == "inverted" || key == "sj_below_0_2" || key == "unused_vertices" || key == "faces_shared_by_more_than_two" ||
-        key == "nonmanifold_boundary_edges")
+    if (key == "inverted" || key == "sj_below_0_2" || key == "unused_vertices" ||
+        key == "faces_shared_by_more_than_two" || key == "nonmanifold_boundary_edges")
       threshold("==", 0, "a valid mesh");
     if (key == "sj_min") threshold(">=", min_sj, min_sj_from);
     out.push_back(f);
@@ -177,7 +177,8 @@ std::string read_file(const fs::path& p, const std::string& what) {
 }
 
 void replace_all(std::string& s, const std::string& from, const std::string& to) {
-  for (size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) s.replace(at, from.size(), to);
+  for (size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size()))
+    s.replace(at, from.size(), to);
 }
 
 }  // namespace
@@ -199,7 +200,8 @@ json report_page_data(const json& report, const HexMesh& mesh, const ReportHtmlP
   const bool retry_sj = retry.is_object() && retry.contains("min_sj") && retry["min_sj"].is_number();
   const double min_sj = retry_sj ? retry["min_sj"].get<double>() : p.default_min_sj;
   d["quality_node"] = qid;
-  d["figures"] = figures(metrics, min_sj, retry_sj ? "the config's retry.min_sj" : "polyhex's default (no retry block)");
+  d["figures"] =
+      figures(metrics, min_sj, retry_sj ? "the config's retry.min_sj" : "polyhex's default (no retry block)");
   if (metrics.contains("hexes") && metrics["hexes"].is_number() && metrics["hexes"].get<long>() != long(mesh.H.rows()))
     warnings.push_back("the mesh file has " + std::to_string(mesh.H.rows()) + " hexes, node `" + qid + "` measured " +
                        metrics["hexes"].dump() + ": the histograms and the view are of the file");
@@ -283,8 +285,9 @@ json report_page_data(const json& report, const HexMesh& mesh, const ReportHtmlP
                       {"cache_hit", n.value("cache_hit", false)},
                       {"warnings", n.contains("warnings") ? n["warnings"] : json::array()}});
   }
-  std::stable_sort(stages.begin(), stages.end(),
-                   [](const json& a, const json& b) { return a["seconds"].get<double>() > b["seconds"].get<double>(); });
+  std::stable_sort(stages.begin(), stages.end(), [](const json& a, const json& b) {
+    return a["seconds"].get<double>() > b["seconds"].get<double>();
+  });
   d["stages"] = stages;
   d["retry"] = retry.is_object() ? retry : json();
   d["warnings"] = warnings;
@@ -313,8 +316,9 @@ std::string read_three_js(const fs::path& dir) {
   for (const char* f : {"three.min.js", "examples/js/controls/OrbitControls.js"}) {
     const fs::path p = dir / f;
     if (!fs::is_regular_file(p))
-      throw IOError(p.string() + ": missing; the HTML report inlines three.js from Debian's libjs-three "
-                                 "(apt-get install libjs-three, or tools/setup.sh)");
+      throw IOError(p.string() +
+                    ": missing; the HTML report inlines three.js from Debian's libjs-three "
+                    "(apt-get install libjs-three, or tools/setup.sh)");
     js += read_file(p, "three.js") + "\n;\n";
   }
   return js;

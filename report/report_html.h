@@ -26,22 +26,22 @@
 /// the view clipped (the share of the bounding box kept below the plane along the axis).
 #pragma once
 
+#include "nodes/artefacts/meshes.h"
+
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
 #include <string>
-
-#include "nodes/artefacts/meshes.h"
 
 namespace polyhex {
 
 struct ReportHtmlParams {
   double default_min_sj = 0.3;       ///< sj_min threshold when report.json has no retry.min_sj (configs/default.json's)
   long max_boundary_quads = 100000;  ///< boundary quads drawn at most (about 4.3 MB of page)
-  long max_irregular_points = 20000; ///< irregular vertices drawn at most
-  int worst_hexes = 400;             ///< the hexes of lowest scaled Jacobian drawn whole (seen through the clip)
-  int histogram_bins = 20;           ///< bins of each histogram
-  double edge_ratio_cap = 10;        ///< the edge-ratio histogram ends here; larger ratios go into its last bin
+  long max_irregular_points = 20000;  ///< irregular vertices drawn at most
+  int worst_hexes = 400;              ///< the hexes of lowest scaled Jacobian drawn whole (seen through the clip)
+  int histogram_bins = 20;            ///< bins of each histogram
+  double edge_ratio_cap = 10;         ///< the edge-ratio histogram ends here; larger ratios go into its last bin
 };
 
 /// The data of the page (the JSON object the page's script reads), from a run's report.json and the hex

@@ -1,14 +1,13 @@
 #include "runtime/atomic_file.h"
 
-#include <unistd.h>
+#include "runtime/errors.h"
 
 #include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <system_error>
-
-#include "runtime/errors.h"
+#include <unistd.h>
 
 namespace polyhex {
 
@@ -61,8 +60,7 @@ void write_file_atomic_by_name(const std::filesystem::path& path,
   rename_into_place(tmp, path);
 }
 
-void write_file_atomic(const std::filesystem::path& path, const std::function<void(std::ostream&)>& fill,
-                       bool binary) {
+void write_file_atomic(const std::filesystem::path& path, const std::function<void(std::ostream&)>& fill, bool binary) {
   const std::filesystem::path tmp = temporary_name(path);
   auto cleanup = [&] {
     std::error_code e;

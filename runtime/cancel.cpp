@@ -1,9 +1,8 @@
 #include "runtime/cancel.h"
 
-#include <pthread.h>
-#include <signal.h>
+#include "runtime/errors.h"
+
 #include <sys/syscall.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -13,11 +12,12 @@
 #include <cstring>
 #include <dirent.h>
 #include <mutex>
+#include <pthread.h>
+#include <signal.h>
 #include <string>
 #include <thread>
+#include <unistd.h>
 #include <vector>
-
-#include "runtime/errors.h"
 
 namespace polyhex {
 
@@ -84,7 +84,8 @@ bool blocked_mask(long tid, unsigned long long& mask) {
 
 void block_in_other_threads() {
   const int request = SIGRTMIN + 3;
-  struct sigaction sa {}, old {};
+  struct sigaction sa {
+  }, old{};
   sa.sa_sigaction = on_block_request;
   sa.sa_flags = SA_SIGINFO | SA_RESTART;
   // SIGINT and SIGTERM blocked while the handler runs too, so the thread's mask shows them from the

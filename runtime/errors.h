@@ -35,8 +35,7 @@ struct Interrupted : Error {
 /// Raised by the runtime when a node body throws; what() is "node `id` (`type`): <message>".
 struct NodeError : Error {
   NodeError(std::string id, std::string type, const std::string& message)
-      : Error("node `" + id + "` (`" + type + "`): " + message), node_id(std::move(id)),
-        node_type(std::move(type)) {}
+      : Error("node `" + id + "` (`" + type + "`): " + message), node_id(std::move(id)), node_type(std::move(type)) {}
   std::string node_id;
   std::string node_type;
 };

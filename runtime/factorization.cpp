@@ -1,6 +1,7 @@
 #include "runtime/factorization.h"
 
-#include <dlfcn.h>
+#include "runtime/errors.h"
+
 #include <suitesparse/cholmod.h>
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -9,19 +10,16 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <dlfcn.h>
 #include <mutex>
 #include <vector>
-
-#include "runtime/errors.h"
 
 namespace polyhex {
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 /// Runs the BLAS under CHOLMOD on one thread. A multi-threaded OpenBLAS splits the supernodal
 /// kernels (dsyrk/dgemm/dtrsm) by its own thread count, so the factor's last bits could depend on the
@@ -92,14 +90,22 @@ const Eigen::SparseMatrix<double>* compressed(const Eigen::SparseMatrix<double>&
 
 const char* ordering_name(int o) {
   switch (o) {
-    case CHOLMOD_NATURAL: return "natural";
-    case CHOLMOD_GIVEN: return "given";
-    case CHOLMOD_AMD: return "amd";
-    case CHOLMOD_METIS: return "metis";
-    case CHOLMOD_NESDIS: return "nesdis";
-    case CHOLMOD_COLAMD: return "colamd";
-    case CHOLMOD_POSTORDERED: return "postordered";
-    default: return "unknown";
+    case CHOLMOD_NATURAL:
+      return "natural";
+    case CHOLMOD_GIVEN:
+      return "given";
+    case CHOLMOD_AMD:
+      return "amd";
+    case CHOLMOD_METIS:
+      return "metis";
+    case CHOLMOD_NESDIS:
+      return "nesdis";
+    case CHOLMOD_COLAMD:
+      return "colamd";
+    case CHOLMOD_POSTORDERED:
+      return "postordered";
+    default:
+      return "unknown";
   }
 }
 
@@ -193,9 +199,7 @@ struct CholmodFactorization::Impl {
 };
 
 CholmodFactorization::CholmodFactorization() : impl_(std::make_unique<Impl>()) {}
-CholmodFactorization::CholmodFactorization(const Eigen::SparseMatrix<double>& A) : CholmodFactorization() {
-  factor(A);
-}
+CholmodFactorization::CholmodFactorization(const Eigen::SparseMatrix<double>& A) : CholmodFactorization() { factor(A); }
 CholmodFactorization::~CholmodFactorization() = default;
 CholmodFactorization::CholmodFactorization(CholmodFactorization&&) noexcept = default;
 CholmodFactorization& CholmodFactorization::operator=(CholmodFactorization&&) noexcept = default;
@@ -217,8 +221,9 @@ void CholmodFactorization::analyse(const Eigen::SparseMatrix<double>& A_in) {
       upper += i < j;
     }
   if (lower == 0 && upper > 0)
-    throw SolverError("Cholesky analysis: matrix holds only its upper triangle; pass the lower triangle or the full "
-                      "symmetric matrix");
+    throw SolverError(
+        "Cholesky analysis: matrix holds only its upper triangle; pass the lower triangle or the full "
+        "symmetric matrix");
 
   if (m.L) cholmod_free_factor(&m.L, &m.common.c);
   m.is_factored = false;
@@ -246,7 +251,8 @@ CholmodFactorization CholmodFactorization::share_analysis() const {
   CholmodFactorization out;
   Impl& o = *out.impl_;
   o.L = cholmod_copy_factor(m.L, &o.common.c);
-  if (!o.L) throw SolverError("Cholesky: CHOLMOD cannot copy the analysis (status " + std::to_string(o.common.c.status) + ")");
+  if (!o.L)
+    throw SolverError("Cholesky: CHOLMOD cannot copy the analysis (status " + std::to_string(o.common.c.status) + ")");
   o.n = m.n;
   o.outer = m.outer;
   o.inner = m.inner;
@@ -259,10 +265,10 @@ void CholmodFactorization::factor(const Eigen::SparseMatrix<double>& A_in) {
   auto t0 = Clock::now();
   Eigen::SparseMatrix<double> copy;
   const Eigen::SparseMatrix<double>* A = compressed(A_in, copy);
-  const bool same_pattern =
-      A->rows() == m.n && A->cols() == m.n && static_cast<size_t>(A->nonZeros()) == m.inner.size() &&
-      std::equal(m.outer.begin(), m.outer.end(), A->outerIndexPtr()) &&
-      std::equal(m.inner.begin(), m.inner.end(), A->innerIndexPtr());
+  const bool same_pattern = A->rows() == m.n && A->cols() == m.n &&
+                            static_cast<size_t>(A->nonZeros()) == m.inner.size() &&
+                            std::equal(m.outer.begin(), m.outer.end(), A->outerIndexPtr()) &&
+                            std::equal(m.inner.begin(), m.inner.end(), A->innerIndexPtr());
   if (!same_pattern)
     throw SolverError("Cholesky factorization: the matrix pattern differs from the analysed one (" +
                       std::to_string(A->rows()) + " by " + std::to_string(A->cols()) + ", " +
@@ -274,8 +280,8 @@ void CholmodFactorization::factor(const Eigen::SparseMatrix<double>& A_in) {
   const int ok = cholmod_factorize(&s, m.L, &m.common.c);
   m.stats.factor_seconds += seconds_since(t0);
   if (m.common.c.status == CHOLMOD_NOT_POSDEF)
-    throw SolverError("Cholesky factorization: matrix is not positive definite (pivot " +
-                      std::to_string(m.L->minor) + " of " + std::to_string(m.n) + " is not positive)");
+    throw SolverError("Cholesky factorization: matrix is not positive definite (pivot " + std::to_string(m.L->minor) +
+                      " of " + std::to_string(m.n) + " is not positive)");
   if (!ok || m.common.c.status < CHOLMOD_OK)
     throw SolverError("Cholesky factorization: CHOLMOD failed (status " + std::to_string(m.common.c.status) + ")");
   m.is_factored = true;
@@ -315,13 +321,9 @@ Eigen::MatrixXd CholmodFactorization::solve(const Eigen::MatrixXd& B, SolveMode 
 
 bool CholmodFactorization::factored() const { return impl_->is_factored; }
 long CholmodFactorization::rows() const { return impl_->n; }
-double CholmodFactorization::factor_nonzeros() const {
-  return impl_->L ? impl_->common.c.lnz : 0.0;
-}
+double CholmodFactorization::factor_nonzeros() const { return impl_->L ? impl_->common.c.lnz : 0.0; }
 bool CholmodFactorization::supernodal() const { return impl_->L && impl_->L->is_super; }
-std::string CholmodFactorization::ordering() const {
-  return impl_->L ? ordering_name(impl_->L->ordering) : "none";
-}
+std::string CholmodFactorization::ordering() const { return impl_->L ? ordering_name(impl_->L->ordering) : "none"; }
 const FactorizationStats& CholmodFactorization::stats() const { return impl_->stats; }
 
 }  // namespace polyhex

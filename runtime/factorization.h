@@ -19,13 +19,13 @@ namespace polyhex {
 
 /// Counts and wall times of one or more factorizations. `solves` counts right-hand-side columns.
 struct FactorizationStats {
-  int analyses = 0;             ///< symbolic analyses (ordering + elimination tree)
-  int factorizations = 0;       ///< numeric factorizations
-  long solves = 0;              ///< right-hand-side columns solved
-  long solve_calls = 0;         ///< calls of solve() (a multi-column solve is one call)
-  double analyse_seconds = 0;   ///< wall time of the analyses
-  double factor_seconds = 0;    ///< wall time of the numeric factorizations
-  double solve_seconds = 0;     ///< wall time of the solves (parallel solves: wall time, not CPU time)
+  int analyses = 0;            ///< symbolic analyses (ordering + elimination tree)
+  int factorizations = 0;      ///< numeric factorizations
+  long solves = 0;             ///< right-hand-side columns solved
+  long solve_calls = 0;        ///< calls of solve() (a multi-column solve is one call)
+  double analyse_seconds = 0;  ///< wall time of the analyses
+  double factor_seconds = 0;   ///< wall time of the numeric factorizations
+  double solve_seconds = 0;    ///< wall time of the solves (parallel solves: wall time, not CPU time)
 
   FactorizationStats& operator+=(const FactorizationStats& o);
   /// Adds these figures to `metrics` (keys analyses, factorizations, solves, analyse_seconds,
@@ -38,7 +38,6 @@ enum class SolveMode {
   MultiColumn,  ///< one cholmod_solve2 call on all columns (BLAS-3 supernodal kernels)
   Parallel      ///< tbb::parallel_for over columns, each thread with its own cholmod_common
 };
-
 
 /// Sparse symmetric positive definite LL^T factorization (CHOLMOD, supernodal).
 ///
@@ -78,10 +77,10 @@ class CholmodFactorization {
   Eigen::MatrixXd solve(const Eigen::MatrixXd& B, SolveMode mode = SolveMode::MultiColumn);
 
   bool factored() const;
-  long rows() const;                    ///< n, 0 before analyse()
-  double factor_nonzeros() const;       ///< nnz(L) of the current analysis (0 before)
-  bool supernodal() const;              ///< the analysis chose a supernodal factor
-  std::string ordering() const;         ///< fill-reducing ordering chosen ("amd", "metis", ...)
+  long rows() const;               ///< n, 0 before analyse()
+  double factor_nonzeros() const;  ///< nnz(L) of the current analysis (0 before)
+  bool supernodal() const;         ///< the analysis chose a supernodal factor
+  std::string ordering() const;    ///< fill-reducing ordering chosen ("amd", "metis", ...)
   const FactorizationStats& stats() const;
 
  private:

@@ -5,13 +5,13 @@
 /// search only needs finite values; it halves the step up to `max_halvings` times.
 #pragma once
 
+#include "runtime/cancel.h"
+
 #include <Eigen/Core>
 
 #include <cmath>
 #include <deque>
 #include <vector>
-
-#include "runtime/cancel.h"
 
 namespace polyhex {
 
@@ -32,8 +32,8 @@ enum class LbfgsEnd {
 /// Minimises f from x (updated in place). `f(x, g)` returns the energy at x and, when g is not null, writes
 /// its gradient (g has x's size). `stop(done, x, after_step)` is asked before every iteration
 /// (after_step false) and after each accepted step (after_step true, done counting this step), with
-/// done = the iterations done; true ends the run. `count` (if not null) is incremented per iteration. Checks SIGINT/SIGTERM per iteration.
-/// \throw Interrupted (runtime/cancel.h)
+/// done = the iterations done; true ends the run. `count` (if not null) is incremented per iteration. Checks
+/// SIGINT/SIGTERM per iteration. \throw Interrupted (runtime/cancel.h)
 template <class Energy, class Stop>
 LbfgsEnd lbfgs_minimize(Eigen::VectorXd& x, Energy&& f, const LbfgsOptions& o, Stop&& stop, long* count = nullptr) {
   using VecX = Eigen::VectorXd;
@@ -69,7 +69,8 @@ LbfgsEnd lbfgs_minimize(Eigen::VectorXd& x, Energy&& f, const LbfgsOptions& o, S
     VecX xn;
     double en = e;
     bool ok = false;
-    for (int k = 0; k < o.max_halvings; ++k, step *= 0.5) {  // the gradient comes with each trial: most first trials pass
+    for (int k = 0; k < o.max_halvings;
+         ++k, step *= 0.5) {  // the gradient comes with each trial: most first trials pass
       xn = x + step * d;
       en = f(xn, &gn);
       if (std::isfinite(en) && en <= e + 1e-4 * step * slope) {

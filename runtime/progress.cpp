@@ -1,10 +1,10 @@
 #include "runtime/progress.h"
 
 #include <sys/ioctl.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
+#include <unistd.h>
 
 namespace polyhex {
 
@@ -18,7 +18,8 @@ std::string progress_bar_line(const std::string& id, double fraction, const std:
   const int filled = std::min(bar, int(std::floor(f * bar)));
   char pct[8];
   std::snprintf(pct, sizeof pct, "%3d%%", std::clamp(int(std::floor(f * 100)), 0, 100));
-  std::string line = "[" + id + "] " + std::string(size_t(filled), '#') + std::string(size_t(bar - filled), '-') + " " + pct;
+  std::string line =
+      "[" + id + "] " + std::string(size_t(filled), '#') + std::string(size_t(bar - filled), '-') + " " + pct;
   if (!what.empty()) line += " " + what;
   if (width >= 0 && line.size() > size_t(width)) line.resize(size_t(width));
   return line;
@@ -30,7 +31,8 @@ int terminal_columns(int fd) {
   return 80;
 }
 
-ProgressPrinter::ProgressPrinter(std::FILE* out, ProgressMode mode, int width) : out_(out), mode_(mode), width_(width) {}
+ProgressPrinter::ProgressPrinter(std::FILE* out, ProgressMode mode, int width)
+    : out_(out), mode_(mode), width_(width) {}
 
 ProgressPrinter::~ProgressPrinter() { clear(); }
 

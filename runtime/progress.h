@@ -48,7 +48,8 @@ class ProgressPrinter {
   /// One event of RunOptions::on_event: "start", "progress" (value = fraction), "done" and "cached"
   /// (value = seconds). In bar mode a progress event redraws the line only when its text changes and at
   /// most every 50 ms, unless it reaches 100 %.
-  void event(const std::string& e, const std::string& id, const std::string& type, double value, const std::string& what);
+  void event(const std::string& e, const std::string& id, const std::string& type, double value,
+             const std::string& what);
   /// Erases the bar's line (before other output), if one is shown.
   void clear();
 

@@ -18,6 +18,11 @@
 //             metrics: the node's metrics of the last run}],
 //    units: {stage: "unit: what is counted"}}
 // Medians of an even count are the mean of the two middle values.
+#include "graph/pipeline.h"
+#include "runtime/atomic_file.h"
+#include "tools/cli_run.h"
+#include "tools/commands.h"
+
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -27,11 +32,6 @@
 #include <iostream>
 #include <memory>
 #include <thread>
-
-#include "graph/pipeline.h"
-#include "runtime/atomic_file.h"
-#include "tools/cli_run.h"
-#include "tools/commands.h"
 
 namespace polyhex {
 namespace {
@@ -56,7 +56,8 @@ const UnitRule kUnits[] = {
     {"tetrahedralize", "tets", nullptr, "tets/s", "tets generated (metrics.tets)"},
     {"rotation_deform", "tets", nullptr, "tets/s",
      "tets deformed, all iterations together (metrics.tets); solver: solves/s of the factored systems"},
-    {"polycube_segment", "boundary_triangles", nullptr, "triangles/s", "boundary triangles labelled (metrics.boundary_triangles)"},
+    {"polycube_segment", "boundary_triangles", nullptr, "triangles/s",
+     "boundary triangles labelled (metrics.boundary_triangles)"},
     {"position_deform", "tets", "tets", "tets/s", "tets mapped (metrics.tets of the `tets` input)"},
     {"hex_extract", "hexes", nullptr, "hexes/s", "hexes extracted (metrics.hexes)"},
     {"hex_from_tets", "hexes", nullptr, "hexes/s", "hexes made (metrics.hexes)"},
@@ -86,7 +87,8 @@ json stats(const std::vector<double>& v) {
 }
 
 // The value of `metric` at node i, or through an input of the node's own output type. {node, value}
-std::pair<int, json> find_metric(const Pipeline& p, const std::vector<json>& metrics, int i, const std::string& metric) {
+std::pair<int, json> find_metric(const Pipeline& p, const std::vector<json>& metrics, int i,
+                                 const std::string& metric) {
   const json& m = metrics[i];
   if (m.contains(metric) && m[metric].is_number()) return {i, m[metric]};
   const ResolvedNode& n = p.nodes()[i];
@@ -99,7 +101,8 @@ std::pair<int, json> find_metric(const Pipeline& p, const std::vector<json>& met
 // {count json or null, unit or null}
 std::pair<json, json> node_count(const Pipeline& p, const std::vector<json>& metrics, int i) {
   const ResolvedNode& n = p.nodes()[i];
-  auto make = [&](const std::pair<int, json>& hit, const std::string& metric, const std::string& unit) -> std::pair<json, json> {
+  auto make = [&](const std::pair<int, json>& hit, const std::string& metric,
+                  const std::string& unit) -> std::pair<json, json> {
     if (hit.first < 0) return {nullptr, nullptr};
     return {json{{"metric", metric}, {"value", hit.second}, {"node", p.nodes()[hit.first].id}}, unit};
   };
@@ -167,7 +170,8 @@ int cmd_bench(BenchOptions o) {
       seconds[i].push_back(n.seconds);
       metrics[i] = n.metrics;
       for (const char* key : kSolverSeconds)
-        if (n.metrics.contains(key) && n.metrics[key].is_number()) solver[i][key].push_back(n.metrics[key].get<double>());
+        if (n.metrics.contains(key) && n.metrics[key].is_number())
+          solver[i][key].push_back(n.metrics[key].get<double>());
     }
   }
 
@@ -187,10 +191,12 @@ int cmd_bench(BenchOptions o) {
   out["total"] = stats(totals);
   json units = json::object();
   for (const UnitRule& r : kUnits) units[r.stage] = std::string(r.unit) + ": " + r.doc;
-  units["(other)"] = "hexes/s, tets/s or faces/s: the first of metrics hexes, tets, faces the node (or its same-type input) reports";
+  units["(other)"] =
+      "hexes/s, tets/s or faces/s: the first of metrics hexes, tets, faces the node (or its same-type input) reports";
   out["units"] = units;
 
-  std::fprintf(table, "%-12s %-34s %9s %9s %9s %12s %s\n", "node", "type", "median s", "min s", "max s", "throughput", "unit");
+  std::fprintf(table, "%-12s %-34s %9s %9s %9s %12s %s\n", "node", "type", "median s", "min s", "max s", "throughput",
+               "unit");
   json nodes = json::array();
   std::vector<std::string> solver_lines;
   for (size_t i = 0; i < nn; ++i) {
@@ -214,9 +220,10 @@ int cmd_bench(BenchOptions o) {
       s["factor_seconds_each"] = nf > 0 ? json(f / nf) : json(nullptr);
       s["solves_per_second"] = sv > 0 ? json(ns / sv) : json(nullptr);
       char line[256];
-      std::snprintf(line, sizeof line,
-                    "%-12s factor %.3f s median (%g factorizations, %.3f s each); solve %.3f s (%g solves, %.1f solves/s)",
-                    n.id.c_str(), f, nf, nf > 0 ? f / nf : 0.0, sv, ns, sv > 0 ? ns / sv : 0.0);
+      std::snprintf(
+          line, sizeof line,
+          "%-12s factor %.3f s median (%g factorizations, %.3f s each); solve %.3f s (%g solves, %.1f solves/s)",
+          n.id.c_str(), f, nf, nf > 0 ? f / nf : 0.0, sv, ns, sv > 0 ? ns / sv : 0.0);
       solver_lines.push_back(line);
       j["solver"] = s;
     }
@@ -248,7 +255,9 @@ const bool registered = register_commands([](CLI::App& app, std::vector<Command>
       "bench", "stage throughput: warm-up, then N runs without cache; per node min/median/max seconds and throughput");
   bench->add_option("config", o->req.config, "pipeline config (JSON)")->required();
   bench->add_option("--input,-i", o->req.input, "value of ${input} in the config (a surface or tet mesh file)");
-  bench->add_option("--hex-edge", o->req.hex_edge, "hex edge, fraction of the reference length (the config var hex_edge)")
+  bench
+      ->add_option("--hex-edge", o->req.hex_edge,
+                   "hex edge, fraction of the reference length (the config var hex_edge)")
       ->check(CLI::Range(1e-4, 0.5));
   bench->add_option("--set,-s", o->req.sets, "override a param: id.param=value (repeatable)");
   bench->add_option("--threads,-j", o->req.threads, "worker threads (default: all cores)");

@@ -1,12 +1,12 @@
 // `polyhex cache stats|clear|prune`: inspect and trim the artefact cache (graph/cache.h).
+#include "graph/cache.h"
+#include "tools/commands.h"
+
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
 #include <iostream>
 #include <memory>
-
-#include "graph/cache.h"
-#include "tools/commands.h"
 
 namespace polyhex {
 namespace {
@@ -34,7 +34,8 @@ int cmd_stats(const CacheOptions& o) {
   std::printf("cache %s: %zu entries, %s\n", c.dir().c_str(), s.entries, format_size(s.bytes).c_str());
   for (auto& [type, t] : s.by_type)
     std::printf("  %-40s %6zu entries %12s\n", type.c_str(), t.first, format_size(t.second).c_str());
-  if (s.temp_files) std::printf("  %zu temporary files (writes in progress or left by a killed process)\n", s.temp_files);
+  if (s.temp_files)
+    std::printf("  %zu temporary files (writes in progress or left by a killed process)\n", s.temp_files);
   return 0;
 }
 

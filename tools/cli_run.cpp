@@ -1,14 +1,13 @@
 #include "tools/cli_run.h"
 
-#include <unistd.h>
+#include "graph/cache.h"
+#include "runtime/errors.h"
+#include "runtime/progress.h"
 
 #include <cstdio>
 #include <functional>
 #include <system_error>
-
-#include "graph/cache.h"
-#include "runtime/errors.h"
-#include "runtime/progress.h"
+#include <unistd.h>
 
 namespace polyhex {
 namespace {
@@ -80,7 +79,8 @@ Judgement judge(const RunResult& r, const std::string& node) {
     if (n.id == node) {
       const json& m = n.metrics;
       if (!m.contains("inverted") || !m["inverted"].is_number() || !m.contains("sj_min") || !m["sj_min"].is_number())
-        throw ConfigError("retry: node `" + node + "` (`" + n.type + "`) reports no numeric `inverted` and `sj_min` metrics");
+        throw ConfigError("retry: node `" + node + "` (`" + n.type +
+                          "`) reports no numeric `inverted` and `sj_min` metrics");
       return {m["inverted"].get<double>(), m["sj_min"].get<double>()};
     }
   throw ConfigError("retry: no node `" + node + "` in the run");
@@ -130,7 +130,8 @@ RunResult run_pipeline(const Pipeline& p, const RunRequest& req) {
   opt.save_all = req.save_all;
   opt.threads = req.threads;
   if (!req.no_cache) opt.cache_dir = req.cache_dir.empty() ? default_cache_dir(req.out_dir) : req.cache_dir;
-  ProgressPrinter progress(stderr, progress_mode(req.verbosity, ::isatty(STDERR_FILENO)), terminal_columns(STDERR_FILENO));
+  ProgressPrinter progress(stderr, progress_mode(req.verbosity, ::isatty(STDERR_FILENO)),
+                           terminal_columns(STDERR_FILENO));
   opt.on_event = [&](const std::string& e, const std::string& id, const std::string& type, double v,
                      const std::string& what) { progress.event(e, id, type, v, what); };
   RunResult r = p.run(opt);
@@ -150,7 +151,8 @@ RunResult run_with_retry(const Pipeline& p, const std::optional<RetryPlan>& retr
     base.cache_dir = default_cache_dir(req.out_dir);  // the variants' folders lie inside OUT: the same cache
   auto clean_up = [&] {
     std::error_code ec;
-    for (size_t k = 1; k <= plan.variants.size(); ++k) fs::remove_all(req.out_dir / (".retry-" + std::to_string(k)), ec);
+    for (size_t k = 1; k <= plan.variants.size(); ++k)
+      fs::remove_all(req.out_dir / (".retry-" + std::to_string(k)), ec);
     if (req.no_cache) fs::remove_all(temp_cache, ec);
   };
   clean_up();  // leftovers of an interrupted earlier run
@@ -183,15 +185,18 @@ RunResult run_with_retry(const Pipeline& p, const std::optional<RetryPlan>& retr
     RunRequest v = base;
     v.out_dir = req.out_dir / (".retry-" + std::to_string(k + 1));
     if (req.verbosity > 0 || ::isatty(STDERR_FILENO))
-      std::fprintf(stderr, "polyhex: retry %zu of %zu: %s (first run: %g inverted, minimum scaled Jacobian %.3f)\n", k + 1,
-                   plan.variants.size(), plan.variants[k].dump().c_str(), attempts[0]["inverted"].get<double>(),
+      std::fprintf(stderr, "polyhex: retry %zu of %zu: %s (first run: %g inverted, minimum scaled Jacobian %.3f)\n",
+                   k + 1, plan.variants.size(), plan.variants[k].dump().c_str(), attempts[0]["inverted"].get<double>(),
                    attempts[0]["sj_min"].get<double>());
     RunResult r = run_pipeline(plan.pipelines[k], v);
     total += r.seconds;
     if (r.interrupted) {
       record(r, plan.variants[k], nullptr);
       r.seconds = total;
-      r.retry = {{"node", plan.node}, {"max_inverted", plan.max_inverted}, {"min_sj", plan.min_sj}, {"chosen", nullptr},
+      r.retry = {{"node", plan.node},
+                 {"max_inverted", plan.max_inverted},
+                 {"min_sj", plan.min_sj},
+                 {"chosen", nullptr},
                  {"attempts", attempts}};
       write_report(r, req.out_dir);
       return r;
@@ -210,7 +215,10 @@ RunResult run_with_retry(const Pipeline& p, const std::optional<RetryPlan>& retr
   }
   if (chosen > 0) move_files(req.out_dir / (".retry-" + std::to_string(chosen)), req.out_dir);
   best.seconds = total;
-  best.retry = {{"node", plan.node}, {"max_inverted", plan.max_inverted}, {"min_sj", plan.min_sj}, {"chosen", chosen},
+  best.retry = {{"node", plan.node},
+                {"max_inverted", plan.max_inverted},
+                {"min_sj", plan.min_sj},
+                {"chosen", chosen},
                 {"attempts", attempts}};
   write_report(best, req.out_dir);
   return best;

@@ -14,7 +14,8 @@
 /// nodes downstream of a changed param run again; with --no-cache a temporary cache OUT/.retry-cache
 /// serves the attempts and is removed), until one is accepted. The best attempt is kept: fewest inverted
 /// hexes, then the highest minimum scaled Jacobian (the first attempt wins a tie); its files are moved into
-/// OUT and report.json is its report with `retry`: {node, max_inverted, min_sj, chosen (0 = the config as given), attempts:
+/// OUT and report.json is its report with `retry`: {node, max_inverted, min_sj, chosen (0 = the config as given),
+/// attempts:
 /// [{set, status, inverted, sj_min, seconds, accepted}]}; `seconds` is the time of all attempts.
 /// Why: the hex stage's outcome (the optimizer's minimum, whether a fold can be untangled) is sensitive to
 /// small changes of the map, so two equally sound variants of a stage each fail on some models where the
@@ -24,37 +25,37 @@
 /// pipeline).
 #pragma once
 
+#include "graph/pipeline.h"
+
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "graph/pipeline.h"
-
 namespace polyhex {
 
 struct RunRequest {
   std::filesystem::path config;
-  std::string input;                 ///< value of ${input}; empty = the config's default
-  std::vector<std::string> sets;     ///< id.param=value overrides
+  std::string input;              ///< value of ${input}; empty = the config's default
+  std::vector<std::string> sets;  ///< id.param=value overrides
   /// --hex-edge: the config var `hex_edge` (the hex edge as a fraction of the reference length, which
   /// the default configs' other sizes follow), set before `sets`; 0 = the config's own
   double hex_edge = 0;
   std::filesystem::path out_dir = "polyhex-out";
   int threads = 0;
   bool save_all = false;
-  std::filesystem::path cache_dir;   ///< artefact cache; empty = default_cache_dir(out_dir) (.polyhex-cache beside it)
-  bool no_cache = false;             ///< --no-cache: run every node, read and write no cache (benchmarks)
-  int verbosity = 0;                 ///< 0 = progress on a terminal only, 1 = -v, 2 = -vv
+  std::filesystem::path cache_dir;  ///< artefact cache; empty = default_cache_dir(out_dir) (.polyhex-cache beside it)
+  bool no_cache = false;            ///< --no-cache: run every node, read and write no cache (benchmarks)
+  int verbosity = 0;                ///< 0 = progress on a terminal only, 1 = -v, 2 = -vv
 };
 
 /// The parsed `retry` block of a config, with every variant's pipeline built.
 struct RetryPlan {
-  std::string node;                  ///< the node whose metrics judge a run
-  double max_inverted = 0;           ///< accepted when inverted <= this ...
-  double min_sj = 0;                 ///< ... and sj_min >= this
-  std::vector<json> variants;        ///< per variant its {"<id>.<param>": value} object
-  std::vector<Pipeline> pipelines;   ///< per variant the pipeline it runs
+  std::string node;                 ///< the node whose metrics judge a run
+  double max_inverted = 0;          ///< accepted when inverted <= this ...
+  double min_sj = 0;                ///< ... and sj_min >= this
+  std::vector<json> variants;       ///< per variant its {"<id>.<param>": value} object
+  std::vector<Pipeline> pipelines;  ///< per variant the pipeline it runs
 };
 
 /// The `retry` block of `config` (none when it has none), checked against `pipeline` (built from the

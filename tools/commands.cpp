@@ -1,13 +1,13 @@
 #include "tools/commands.h"
 
-#include <cstdio>
-#include <iostream>
-#include <memory>
-
+#include "nodes/algorithms/shapes.h"
 #include "nodes/formats/hexmesh_io.h"
 #include "nodes/formats/surface_io.h"
 #include "nodes/quality/quality_json.h"
-#include "nodes/algorithms/shapes.h"
+
+#include <cstdio>
+#include <iostream>
+#include <memory>
 
 namespace polyhex {
 
@@ -55,7 +55,8 @@ int run_check(const CheckOptions& o) {
   if (o.json) {
     std::cout << j.dump() << "\n";
   } else {
-    for (auto it = j.begin(); it != j.end(); ++it) std::printf("%-32s %s\n", it.key().c_str(), it.value().dump().c_str());
+    for (auto it = j.begin(); it != j.end(); ++it)
+      std::printf("%-32s %s\n", it.key().c_str(), it.value().dump().c_str());
   }
   return q.inverted > 0 ? 3 : 0;
 }
@@ -73,10 +74,12 @@ int run_shapes(const ShapeOptions& o) {
 
 const bool registered = register_commands([](CLI::App& app, std::vector<Command>& out) {
   auto c = std::make_shared<CheckOptions>();
-  CLI::App* check = app.add_subcommand("check", "quality of a hex mesh (.vtk/.mesh), optionally against its input surface");
+  CLI::App* check =
+      app.add_subcommand("check", "quality of a hex mesh (.vtk/.mesh), optionally against its input surface");
   check->add_option("mesh", c->mesh, "hex mesh file (.vtk legacy ASCII/BINARY or Medit .mesh)")->required();
   check->add_option("--surface", c->surface, "input surface (.obj .off .stl .ply) for Hausdorff distances");
-  check->add_option("--samples", c->samples, "surface samples per side for the distances")->check(CLI::Range(100, 10000000));
+  check->add_option("--samples", c->samples, "surface samples per side for the distances")
+      ->check(CLI::Range(100, 10000000));
   check->add_flag("--json", c->json, "print the figures as JSON (keys as hexcheck.py --json)");
   out.push_back({check, [c] { return run_check(*c); }});
 

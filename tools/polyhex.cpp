@@ -15,19 +15,19 @@
 // 3 the result has inverted hexes, 130 interrupted (SIGINT/SIGTERM).
 //
 // Subcommands come from command modules (tools/commands.h): this file holds run, graph and nodes.
+#include "graph/pipeline.h"
+#include "report/report_html.h"
+#include "runtime/atomic_file.h"
+#include "runtime/cancel.h"
+#include "tools/cli_run.h"
+#include "tools/commands.h"
+
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <optional>
-
-#include "graph/pipeline.h"
-#include "runtime/atomic_file.h"
-#include "runtime/cancel.h"
-#include "tools/cli_run.h"
-#include "report/report_html.h"
-#include "tools/commands.h"
 
 using namespace polyhex;
 
@@ -66,8 +66,8 @@ int cmd_run(const RunRequest& req, bool html) {
   int code = 0;
   for (const NodeRecord& n : r.nodes) {
     std::string stage = n.type.substr(0, n.type.find('/'));
-    if ((stage == "quality" || stage == "optimize") && n.metrics.contains("inverted") && n.metrics["inverted"].is_number() &&
-        n.metrics["inverted"].get<double>() > 0) {
+    if ((stage == "quality" || stage == "optimize") && n.metrics.contains("inverted") &&
+        n.metrics["inverted"].is_number() && n.metrics["inverted"].get<double>() > 0) {
       std::fprintf(stderr, "polyhex: node `%s` (`%s`) reports %s inverted hexes\n", n.id.c_str(), n.type.c_str(),
                    n.metrics["inverted"].dump().c_str());
       code = 3;
@@ -84,7 +84,8 @@ int cmd_nodes(bool as_json) {
     j["doc"] = s->doc;
     j["output"] = s->output;
     j["inputs"] = json::array();
-    for (auto& p : s->inputs) j["inputs"].push_back({{"name", p.name}, {"type", p.artefact_type}, {"optional", p.optional}});
+    for (auto& p : s->inputs)
+      j["inputs"].push_back({{"name", p.name}, {"type", p.artefact_type}, {"optional", p.optional}});
     j["params"] = json::array();
     for (auto& p : s->params) {
       json pj{{"name", p.name}, {"kind", p.kind}, {"default", p.default_value}, {"doc", p.doc}};
@@ -97,10 +98,11 @@ int cmd_nodes(bool as_json) {
     if (!as_json) {
       std::printf("%s -> %s\n    %s\n", t.c_str(), s->output.empty() ? "(sink)" : s->output.c_str(), s->doc.c_str());
       for (auto& p : s->inputs)
-        std::printf("    input  %-14s %s%s\n", p.name.c_str(), p.artefact_type.c_str(), p.optional ? " (optional)" : "");
+        std::printf("    input  %-14s %s%s\n", p.name.c_str(), p.artefact_type.c_str(),
+                    p.optional ? " (optional)" : "");
       for (auto& p : s->params)
-        std::printf("    param  %-22s %-8s = %-14s %s\n", p.name.c_str(), p.kind.c_str(), p.default_value.dump().c_str(),
-                    p.doc.c_str());
+        std::printf("    param  %-22s %-8s = %-14s %s\n", p.name.c_str(), p.kind.c_str(),
+                    p.default_value.dump().c_str(), p.doc.c_str());
     }
   }
   if (as_json) std::cout << all.dump(2) << "\n";
@@ -113,8 +115,8 @@ const bool registered = register_commands([](CLI::App& app, std::vector<Command>
   add_run_options(run, *run_req);
   run->add_option("--out,-o", run_req->out_dir, "output folder (default polyhex-out)");
   run->add_flag("--save-all", run_req->save_all, "also write every mesh artefact as OUT/<node id>.<ext>");
-  auto* cache_opt =
-      run->add_option("--cache", run_req->cache_dir, "artefact cache folder (default: .polyhex-cache beside the output folder)");
+  auto* cache_opt = run->add_option("--cache", run_req->cache_dir,
+                                    "artefact cache folder (default: .polyhex-cache beside the output folder)");
   run->add_flag("--no-cache", run_req->no_cache, "run every node; read and write no cache")->excludes(cache_opt);
   auto html = std::make_shared<bool>(false);
   run->add_flag("--html", *html, "also write OUT/report.html at the end (as `polyhex report OUT` does)");

@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 PACKAGES=(build-essential cmake ccache libeigen3-dev libtbb-dev libsuitesparse-dev nlohmann-json3-dev libopenvdb-dev
           libboost-iostreams-dev catch2 libtet1.5-dev libcli11-dev libspdlog-dev libopenblas0-pthread
-          python3-numpy python3-scipy clang libclang-rt-14-dev
+          python3-numpy python3-scipy clang libclang-rt-14-dev clang-format
           libcgal-dev libgmp-dev libmpfr-dev                                  # surface conditioning (CGAL)
           libexodusii-dev libnetcdf-dev python3-meshio python3-netcdf4 gmsh   # Exodus II writer, solver-format clients
           libjs-three chromium fonts-dejavu-core zlib1g-dev)  # the HTML report (three.js inlined) and its browser test

@@ -42,18 +42,20 @@
 // sj_avg, irregular_pct, hausdorff_mean, hausdorff_max), the seconds and cache hit of every node, the
 // status (ok, error, crashed, interrupted, not_run), the child's exit code and the error.
 // Exit code: 0 every case ran, 1 some case failed, 2 bad config or command line, 130 interrupted.
-#include <CLI/CLI.hpp>
+#include "graph/pipeline.h"
+#include "runtime/atomic_file.h"
+#include "runtime/cancel.h"
+#include "tools/cli_run.h"
+#include "tools/commands.h"
 
-#include <fcntl.h>
-#include <signal.h>
-#include <spawn.h>
+#include <CLI/CLI.hpp>
 #include <sys/prctl.h>
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <fcntl.h>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -61,14 +63,11 @@
 #include <optional>
 #include <regex>
 #include <set>
+#include <signal.h>
+#include <spawn.h>
 #include <sstream>
 #include <thread>
-
-#include "graph/pipeline.h"
-#include "runtime/atomic_file.h"
-#include "runtime/cancel.h"
-#include "tools/cli_run.h"
-#include "tools/commands.h"
+#include <unistd.h>
 
 extern char** environ;
 
@@ -80,8 +79,8 @@ namespace fs = std::filesystem;
 constexpr int kSweepSchema = 1;
 constexpr size_t kMaxCases = 10000;
 /// Quality figures copied from the last `quality` node into each row.
-const char* const kQualityKeys[] = {"hexes", "inverted", "sj_min", "sj_avg", "irregular_pct", "hausdorff_mean",
-                                    "hausdorff_max"};
+const char* const kQualityKeys[] = {"hexes",         "inverted",       "sj_min",       "sj_avg",
+                                    "irregular_pct", "hausdorff_mean", "hausdorff_max"};
 
 struct SweepOptions {
   fs::path config;
@@ -107,7 +106,7 @@ struct SweepPlan {
   json base;                      ///< the config without `sweep`, ${vars} substituted, --set applied
   std::vector<std::string> keys;  ///< every swept id.param, in order of first appearance
   std::vector<SweepCase> cases;
-  std::vector<Pipeline> pipelines;  ///< one per case
+  std::vector<Pipeline> pipelines;                ///< one per case
   std::vector<std::optional<RetryPlan>> retries;  ///< one per case: the config's retry block on the case's config
 };
 
@@ -189,13 +188,15 @@ void expand_axes(const json& sweep, const Pipeline& base_pipeline, SweepPlan& pl
       a.targets.push_back(t);
       plan.keys.push_back(t);
     }
-    if (a.targets.empty() || it.key().back() == '+') throw ConfigError(where + ": `" + it.key() + "` is not `<node id>.<param>`");
+    if (a.targets.empty() || it.key().back() == '+')
+      throw ConfigError(where + ": `" + it.key() + "` is not `<node id>.<param>`");
     if (!it.value().is_array() || it.value().empty())
       throw ConfigError(where + ": an axis is a non-empty array of values, got " + it.value().dump());
     for (size_t k = 0; k < it.value().size(); ++k) {
       const json& v = it.value()[k];
       for (size_t m = 0; m < k; ++m)
-        if (it.value()[m] == v) throw ConfigError(where + "[" + std::to_string(k) + "]: value " + v.dump() + " is listed twice");
+        if (it.value()[m] == v)
+          throw ConfigError(where + "[" + std::to_string(k) + "]: value " + v.dump() + " is listed twice");
       // Each value alone on the base config: an invalid one is reported at its own path.
       std::vector<std::pair<std::string, json>> one;
       for (auto& target : a.targets) one.push_back({target, v});
@@ -207,7 +208,8 @@ void expand_axes(const json& sweep, const Pipeline& base_pipeline, SweepPlan& pl
       throw ConfigError(plan.source + ": sweep: more than " + std::to_string(kMaxCases) + " cases");
     axes.push_back(std::move(a));
   }
-  if (axes.empty()) throw ConfigError(plan.source + ": sweep: no axis (give {\"<id>.<param>\": [values]} or {\"cases\": [...]})");
+  if (axes.empty())
+    throw ConfigError(plan.source + ": sweep: no axis (give {\"<id>.<param>\": [values]} or {\"cases\": [...]})");
   std::map<std::string, size_t> names;
   for (size_t c = 0; c < count; ++c) {
     SweepCase sc;
@@ -225,7 +227,8 @@ void expand_axes(const json& sweep, const Pipeline& base_pipeline, SweepPlan& pl
     }
     sc.name = join(parts, ",");
     if (!names.emplace(sc.name, c).second)
-      throw ConfigError(plan.source + ": sweep: two cases have the folder name `" + sc.name + "` (values that differ only in punctuation)");
+      throw ConfigError(plan.source + ": sweep: two cases have the folder name `" + sc.name +
+                        "` (values that differ only in punctuation)");
     plan.cases.push_back(std::move(sc));
   }
 }
@@ -247,8 +250,9 @@ void expand_named(const json& cases, const Pipeline& base_pipeline, SweepPlan& p
     SweepCase sc;
     sc.name = c["name"].get<std::string>();
     if (!std::regex_match(sc.name, name_re) || sc.name[0] == '.' || sc.name == "sweep.csv" || sc.name == "sweep.json")
-      throw ConfigError(where + ": case name `" + sc.name +
-                        "` must use letters, digits and ._+=,- only, not start with `.`, and not be sweep.csv/sweep.json");
+      throw ConfigError(
+          where + ": case name `" + sc.name +
+          "` must use letters, digits and ._+=,- only, not start with `.`, and not be sweep.csv/sweep.json");
     if (!names.insert(sc.name).second) throw ConfigError(where + ": duplicate case name `" + sc.name + "`");
     const json set = c.value("set", json::object());
     if (!set.is_object()) throw ConfigError(where + ".set: an object {\"<node id>.<param>\": value}");
@@ -290,15 +294,17 @@ SweepPlan plan_sweep(const SweepOptions& o) {
   if (!o.input.empty()) vars["input"] = o.input;
   json j = load_config_json(o.config, vars);
   if (!j.is_object() || !j.contains("sweep"))
-    throw ConfigError(plan.source + ": no `sweep` key: a sweep config holds \"sweep\": {\"<id>.<param>\": [values]} or "
-                                    "{\"cases\": [{\"name\": ..., \"set\": {...}}]} (see configs/sweeps/)");
+    throw ConfigError(plan.source +
+                      ": no `sweep` key: a sweep config holds \"sweep\": {\"<id>.<param>\": [values]} or "
+                      "{\"cases\": [{\"name\": ..., \"set\": {...}}]} (see configs/sweeps/)");
   const json sweep = j["sweep"];
   j.erase("sweep");
   for (const std::string& s : o.sets) apply_override(j, s);
   plan.base = j;
   const Pipeline base_pipeline = Pipeline::build(parse_config(j, plan.source));
   if (!sweep.is_object() || sweep.empty())
-    throw ConfigError(plan.source + ": sweep: an object of axes {\"<id>.<param>\": [values]} or {\"cases\": [...]}, got " +
+    throw ConfigError(plan.source +
+                      ": sweep: an object of axes {\"<id>.<param>\": [values]} or {\"cases\": [...]}, got " +
                       sweep.dump());
   if (sweep.contains("cases")) {
     if (sweep.size() != 1) throw ConfigError(plan.source + ": sweep: `cases` cannot be combined with axes");
@@ -314,7 +320,8 @@ SweepPlan plan_sweep(const SweepOptions& o) {
   std::map<std::string, int> first_with;
   for (size_t c = 0; c < plan.cases.size(); ++c) {
     const SweepCase& sc = plan.cases[c];
-    plan.pipelines.push_back(build_case(plan.base, sc.set, plan.source, plan.source + ": sweep case `" + sc.name + "`"));
+    plan.pipelines.push_back(
+        build_case(plan.base, sc.set, plan.source, plan.source + ": sweep case `" + sc.name + "`"));
     try {
       plan.retries.push_back(retry_plan(case_config(plan.base, sc.set), plan.pipelines.back(), plan.source));
     } catch (const ConfigError& e) {
@@ -394,8 +401,10 @@ pid_t spawn_case(const SweepOptions& o, const std::string& name, int threads) {
                            std::to_string(threads)});
   if (!o.input.empty()) args.insert(args.end(), {"--input", o.input});
   for (const std::string& s : o.sets) args.insert(args.end(), {"--set", s});
-  if (o.no_cache) args.push_back("--no-cache");
-  else args.insert(args.end(), {"--cache", cache_dir(o).string()});
+  if (o.no_cache)
+    args.push_back("--no-cache");
+  else
+    args.insert(args.end(), {"--cache", cache_dir(o).string()});
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -433,8 +442,8 @@ CaseOutcome collect(const fs::path& dir, int wstatus, double seconds) {
   }
   if (WIFSIGNALED(wstatus)) {
     c.status = "crashed";
-    c.error = std::string("killed by signal ") + std::to_string(WTERMSIG(wstatus)) + " (" + strsignal(WTERMSIG(wstatus)) +
-              "); see " + (dir / "log.txt").string();
+    c.error = std::string("killed by signal ") + std::to_string(WTERMSIG(wstatus)) + " (" +
+              strsignal(WTERMSIG(wstatus)) + "); see " + (dir / "log.txt").string();
     return c;
   }
   c.exit_code = WEXITSTATUS(wstatus);
@@ -557,7 +566,8 @@ json write_summary(const SweepOptions& o, const SweepPlan& plan, const std::vect
       std::vector<std::string> cells = {csv_field(row["name"]), csv_field(row["status"])};
       for (auto& k : plan.keys) cells.push_back(csv_field(row["values"][k]));
       if (!quality_id.empty())
-        for (const char* k : kQualityKeys) cells.push_back(csv_field(row["quality"].is_object() ? row["quality"][k] : json()));
+        for (const char* k : kQualityKeys)
+          cells.push_back(csv_field(row["quality"].is_object() ? row["quality"][k] : json()));
       cells.push_back(csv_field(row["seconds"]));
       for (const ResolvedNode& n : first.nodes()) cells.push_back(csv_field(row["nodes"][n.id]["seconds"]));
       for (const ResolvedNode& n : first.nodes()) cells.push_back(csv_field(row["nodes"][n.id]["cache_hit"]));
@@ -627,8 +637,8 @@ int run_sweep(const SweepOptions& o) {
                  out[c].error.c_str());
   }
   const bool was_interrupted = interrupted();
-  const json summary =
-      write_summary(o, plan, out, jobs, per_case, std::chrono::duration<double>(clock::now() - t0).count(), was_interrupted);
+  const json summary = write_summary(o, plan, out, jobs, per_case,
+                                     std::chrono::duration<double>(clock::now() - t0).count(), was_interrupted);
   int failed = 0;
   int width = 4;
   for (const SweepCase& sc : plan.cases) width = std::max(width, int(sc.name.size()));
@@ -646,13 +656,15 @@ int run_sweep(const SweepOptions& o) {
   std::string counts;
   for (auto& [status, n] : by_status) counts += (counts.empty() ? "" : ", ") + std::to_string(n) + " " + status;
   std::fprintf(stderr, "polyhex sweep: %s%zu cases: %s; %s and %s\n", was_interrupted ? "interrupted; " : "",
-               plan.cases.size(), counts.c_str(), (o.out_dir / "sweep.csv").c_str(), (o.out_dir / "sweep.json").c_str());
+               plan.cases.size(), counts.c_str(), (o.out_dir / "sweep.csv").c_str(),
+               (o.out_dir / "sweep.json").c_str());
   return was_interrupted ? 130 : failed ? 1 : 0;
 }
 
 const bool registered = register_commands([](CLI::App& app, std::vector<Command>& out) {
   auto o = std::make_shared<SweepOptions>();
-  auto* c = app.add_subcommand("sweep", "run a config once per case of its `sweep`; OUT/sweep.csv, OUT/sweep.json, OUT/<case>/");
+  auto* c = app.add_subcommand("sweep",
+                               "run a config once per case of its `sweep`; OUT/sweep.csv, OUT/sweep.json, OUT/<case>/");
   c->add_option("config", o->config, "pipeline config (JSON) with a `sweep` key")->required();
   c->add_option("--input,-i", o->input, "value of ${input} in the config");
   c->add_option("--set,-s", o->sets, "override a param of every case: id.param=value (repeatable; not a swept param)");

@@ -1,5 +1,7 @@
 #include "nodes/algorithms/chart_order.h"
 
+#include "nodes/artefacts/polycube.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -10,8 +12,6 @@
 #include <stdexcept>
 #include <string>
 #include <tuple>
-
-#include "nodes/artefacts/polycube.h"
 
 namespace polyhex {
 
@@ -122,7 +122,8 @@ AxisChartOrder chart_order_evidence(const RowMatrixX3d& V, const TetEdgeGraph& g
   for (auto& [key, s] : samples) {
     const double p_at = s.at_p / s.count, q_at = s.at_q / s.count, delta = q_at - p_at;
     r.distance_samples.push_back({key.first, key.second, delta, p_at, q_at});
-    if (std::abs(delta) > 0.5 * h) r.ordered.push_back({key.first, key.second, delta > 0 ? 1 : -1, std::abs(delta) / h});
+    if (std::abs(delta) > 0.5 * h)
+      r.ordered.push_back({key.first, key.second, delta > 0 ? 1 : -1, std::abs(delta) / h});
   }
   // Bridged pairs: two a-groups bordering one chart of another axis are its two ends along a.
   for (int b = 0; b < nC; ++b) {
@@ -220,7 +221,8 @@ std::vector<long> place_levels(const OrderAcceptance& acc, const std::vector<dou
 void push_levels(const OrderAcceptance& acc, std::vector<long>& k) {
   const int nG = int(acc.up.size());
   if (int(k.size()) != nG)
-    throw std::invalid_argument("push_levels: " + std::to_string(nG) + " groups, " + std::to_string(k.size()) + " levels");
+    throw std::invalid_argument("push_levels: " + std::to_string(nG) + " groups, " + std::to_string(k.size()) +
+                                " levels");
   std::vector<int> indeg(nG, 0), queue;
   for (int g = 0; g < nG; ++g)
     for (int y : acc.up[g]) ++indeg[y];
@@ -258,10 +260,9 @@ std::vector<CycleCut> cycle_cuts(const AxisChartOrder& order, const std::vector<
   // g's height where its region meets group o's (the pair's mean closest-vertex coordinate on g's side)
   auto height = [&](int g, int o, double& z) {
     const std::pair<int, int> key{std::min(g, o), std::max(g, o)};
-    auto it = std::lower_bound(order.distance_samples.begin(), order.distance_samples.end(), key,
-                               [](const AxisChartOrder::Sample& x, const std::pair<int, int>& k) {
-                                 return std::make_pair(x.p, x.q) < k;
-                               });
+    auto it = std::lower_bound(
+        order.distance_samples.begin(), order.distance_samples.end(), key,
+        [](const AxisChartOrder::Sample& x, const std::pair<int, int>& k) { return std::make_pair(x.p, x.q) < k; });
     if (it == order.distance_samples.end() || it->p != key.first || it->q != key.second) return false;
     z = g == it->p ? it->p_at : it->q_at;
     return true;

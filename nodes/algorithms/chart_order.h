@@ -17,10 +17,10 @@
 /// one that would close a cycle.
 #pragma once
 
+#include "nodes/artefacts/meshes.h"
+
 #include <utility>
 #include <vector>
-
-#include "nodes/artefacts/meshes.h"
 
 namespace polyhex {
 
@@ -47,8 +47,8 @@ struct AxisChartOrder {
   std::vector<int> group_size;      ///< vertices per group
   std::vector<double> group_mean;   ///< mean a-coordinate of a group's vertices
   struct Sample {
-    int p, q;      ///< groups, p < q
-    double delta;  ///< mean axis distance (closest vertex of q minus closest vertex of p)
+    int p, q;                   ///< groups, p < q
+    double delta;               ///< mean axis distance (closest vertex of q minus closest vertex of p)
     double p_at = 0, q_at = 0;  ///< mean axis coordinate of p's / q's closest vertices over the samples
                                 ///< (where along a, on each group, the two regions meet; delta = q_at − p_at)
   };

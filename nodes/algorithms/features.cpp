@@ -1,5 +1,7 @@
 #include "nodes/algorithms/features.h"
 
+#include "runtime/errors.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -7,8 +9,6 @@
 #include <queue>
 #include <string>
 #include <unordered_map>
-
-#include "runtime/errors.h"
 
 namespace polyhex {
 namespace {
@@ -37,9 +37,9 @@ namespace {
 
 /// An edge shared by exactly two triangles, with the angle test already done.
 struct ManifoldEdge {
-  int a, b;       ///< vertices, a < b
-  int f0, f1;     ///< the two triangles
-  bool sharp;     ///< their normals differ by more than the threshold angle
+  int a, b;    ///< vertices, a < b
+  int f0, f1;  ///< the two triangles
+  bool sharp;  ///< their normals differ by more than the threshold angle
 };
 
 /// Every edge of `surface` shared by exactly two triangles, sorted by (a, b).
@@ -304,8 +304,10 @@ CreaseSnap snap_to_creases(const RowMatrixX3d& V, const Eigen::Matrix<int, Eigen
         for (size_t k = 1; k + 1 < path.size(); ++k) blocked[size_t(path[k])] = 1;
         std::vector<int> back = path.empty() ? std::vector<int>{} : path_between(m, s);
         for (size_t k = 1; k + 1 < path.size(); ++k) blocked[size_t(path[k])] = 0;
-        if (back.size() < 2) path.clear();
-        else path.insert(path.end(), back.begin() + 1, back.end() - 1);
+        if (back.size() < 2)
+          path.clear();
+        else
+          path.insert(path.end(), back.begin() + 1, back.end() - 1);
       }
     }
     ok = ok && path.size() >= 2;

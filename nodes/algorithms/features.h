@@ -11,10 +11,10 @@
 /// have an edge on it instead of a face across it.
 #pragma once
 
+#include "nodes/artefacts/meshes.h"
+
 #include <array>
 #include <vector>
-
-#include "nodes/artefacts/meshes.h"
 
 namespace polyhex {
 
@@ -54,11 +54,11 @@ Eigen::Vector3d closest_on_line(const std::vector<Eigen::Vector3d>& line, const 
 
 /// Which boundary vertices of a hex mesh follow which crease.
 struct CreaseSnap {
-  std::vector<int> line;       ///< per hex vertex: the crease line it moves along, -1 if none
-  std::vector<int> corner;     ///< per hex vertex: the crease corner it stays at, -1 if none
-  int lines_snapped = 0;       ///< crease lines with a path of boundary edges
-  int lines_skipped = 0;       ///< crease lines without an acceptable path (too far from every boundary edge path)
-  long vertices = 0;           ///< hex vertices on a crease line or at a corner
+  std::vector<int> line;    ///< per hex vertex: the crease line it moves along, -1 if none
+  std::vector<int> corner;  ///< per hex vertex: the crease corner it stays at, -1 if none
+  int lines_snapped = 0;    ///< crease lines with a path of boundary edges
+  int lines_skipped = 0;    ///< crease lines without an acceptable path (too far from every boundary edge path)
+  long vertices = 0;        ///< hex vertices on a crease line or at a corner
 };
 
 /// For every crease line, the path of boundary edges of the hex mesh between the boundary vertices nearest

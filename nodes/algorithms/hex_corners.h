@@ -5,14 +5,15 @@
 /// global untangling and the PolyCube map's untangling (nodes/position_deform/untangle_map.cpp) minimise.
 #pragma once
 
+#include "nodes/artefacts/hex_topology.h"
+
 #include <Eigen/Dense>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
-
-#include "nodes/artefacts/hex_topology.h"
 
 namespace polyhex::optimize_detail {
 

@@ -1,5 +1,9 @@
 #include "nodes/algorithms/hex_quality.h"
 
+#include "nodes/algorithms/triangle_tree.h"
+#include "nodes/artefacts/hex_topology.h"
+#include "runtime/errors.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -10,10 +14,6 @@
 #include <random>
 #include <string>
 #include <vector>
-
-#include "nodes/artefacts/hex_topology.h"
-#include "nodes/algorithms/triangle_tree.h"
-#include "runtime/errors.h"
 
 namespace polyhex {
 
@@ -56,7 +56,7 @@ std::uint64_t edge_key(int a, int b) {
 
 // Topological figures of hexcheck.py `topology()`.
 struct Topology {
-  RowMatrixX4iQ boundary;  // #Q by 4
+  RowMatrixX4iQ boundary;       // #Q by 4
   std::vector<char> irregular;  // #V: 1 for an irregular vertex (0 for an unused one)
   double irregular_pct = 0, irregular_interior_pct = 0, irregular_boundary_pct = 0;
   long unused_vertices = 0, faces_shared_by_more_than_two = 0, nonmanifold_boundary_edges = 0;
@@ -299,8 +299,9 @@ double hex_mesh_volume(const HexMesh& mesh) {
   return vol.sum();  // serial sum: the same figure for any thread count
 }
 
-Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> hex_boundary_quads(const HexMesh& mesh, std::vector<int>* hex_of_quad,
-                                                                       std::vector<int>* face_of_quad) {
+Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> hex_boundary_quads(const HexMesh& mesh,
+                                                                          std::vector<int>* hex_of_quad,
+                                                                          std::vector<int>* face_of_quad) {
   return boundary_faces(mesh, nullptr, hex_of_quad, face_of_quad);
 }
 

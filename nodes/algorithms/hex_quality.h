@@ -15,18 +15,18 @@
 ///   the triangles), where hexcheck approximates it from the 24 nearest triangle centroids.
 #pragma once
 
-#include <vector>
+#include "nodes/artefacts/meshes.h"
 
 #include <Eigen/Core>
+
 #include <array>
 #include <cstdint>
-
-#include "nodes/artefacts/meshes.h"
+#include <vector>
 
 namespace polyhex {
 
 struct QualityParams {
-  int samples = 100000;  ///< points sampled on each of the two surfaces for the distances
+  int samples = 100000;    ///< points sampled on each of the two surfaces for the distances
   std::uint64_t seed = 1;  ///< seed of the sampler (fixed, so reports are reproducible)
 };
 
@@ -34,28 +34,28 @@ struct QualityParams {
 struct HexQuality {
   long hexes = 0;
   long vertices = 0;
-  long inverted = 0;            ///< hexes with corner scaled Jacobian min <= 0
-  double sj_min = 0, sj_avg = 0;               ///< scaled Jacobian with the centre term
-  double sj_corner_min = 0, sj_corner_avg = 0; ///< corners only
-  long sj_below_0_2 = 0;        ///< hexes with sj < 0.2
-  double volume = 0;            ///< signed volume, 5 tets per hex
+  long inverted = 0;                            ///< hexes with corner scaled Jacobian min <= 0
+  double sj_min = 0, sj_avg = 0;                ///< scaled Jacobian with the centre term
+  double sj_corner_min = 0, sj_corner_avg = 0;  ///< corners only
+  long sj_below_0_2 = 0;                        ///< hexes with sj < 0.2
+  double volume = 0;                            ///< signed volume, 5 tets per hex
   double irregular_pct = 0, irregular_interior_pct = 0, irregular_boundary_pct = 0;
   long unused_vertices = 0;
   long faces_shared_by_more_than_two = 0;  ///< distinct faces (as vertex sets) used by > 2 hexes
   long nonmanifold_boundary_edges = 0;     ///< boundary edges not in exactly two boundary quads
   long boundary_quads = 0;
-  bool has_surface = false;     ///< the four figures below are set
-  double bbox_diag = 0;         ///< bounding-box diagonal of the surface
-  double hausdorff_mean = 0;    ///< (mean hex->surface + mean surface->hex) / 2 / bbox_diag
-  double hausdorff_max = 0;     ///< max over both directions / bbox_diag
-  double volume_ratio = 0;      ///< |volume| / |volume enclosed by the surface| (0 unless every edge of
-                                ///< the surface is in exactly two triangles)
+  bool has_surface = false;   ///< the four figures below are set
+  double bbox_diag = 0;       ///< bounding-box diagonal of the surface
+  double hausdorff_mean = 0;  ///< (mean hex->surface + mean surface->hex) / 2 / bbox_diag
+  double hausdorff_max = 0;   ///< max over both directions / bbox_diag
+  double volume_ratio = 0;    ///< |volume| / |volume enclosed by the surface| (0 unless every edge of
+                              ///< the surface is in exactly two triangles)
   /// The surface has no edge in just one triangle. Against an open surface (an input with holes,
   /// measured before its repair) the distances are one-sided, surface -> hex boundary: the hex
   /// boundary over a hole has no surface to be near.
   bool surface_closed = true;
-  Eigen::VectorXd sj;           ///< #H scaled Jacobian of every hex (centre term included)
-  Eigen::VectorXd sj_corner;    ///< #H minimum corner scaled Jacobian of every hex
+  Eigen::VectorXd sj;         ///< #H scaled Jacobian of every hex (centre term included)
+  Eigen::VectorXd sj_corner;  ///< #H minimum corner scaled Jacobian of every hex
 };
 
 /// Scaled Jacobian of one hex.
@@ -95,8 +95,8 @@ double hex_mesh_volume(const HexMesh& mesh);
 /// \param face_of_quad  out (optional): its local face 0..5 in that hex (hex_topology::kFaces)
 /// \return #Q by 4   \pre indices of mesh.H in range
 Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> hex_boundary_quads(const HexMesh& mesh,
-                                                                       std::vector<int>* hex_of_quad = nullptr,
-                                                                       std::vector<int>* face_of_quad = nullptr);
+                                                                          std::vector<int>* hex_of_quad = nullptr,
+                                                                          std::vector<int>* face_of_quad = nullptr);
 
 /// Checks that a hex mesh can be measured.
 /// \throw InvalidInput when it has no hexes, an index is out of range or a coordinate is not finite

@@ -1,5 +1,8 @@
 #include "nodes/algorithms/reference_length.h"
 
+#include "nodes/algorithms/rotations.h"
+#include "runtime/errors.h"
+
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/convex_hull_3.h>
 #include <Eigen/Geometry>
@@ -9,9 +12,6 @@
 #include <cmath>
 #include <iterator>
 #include <vector>
-
-#include "nodes/algorithms/rotations.h"
-#include "runtime/errors.h"
 
 namespace polyhex {
 namespace {
@@ -39,12 +39,15 @@ std::pair<double, Eigen::Matrix3d> nelder_mead(const RowMatrixX3d& P, const Eige
     if (yr < y[best]) {
       const Eigen::Vector3d xe = c + 2 * (c - x[worst]);
       const double ye = f(xe);
-      if (ye < yr) x[worst] = xe, y[worst] = ye;
-      else x[worst] = xr, y[worst] = yr;
+      if (ye < yr)
+        x[worst] = xe, y[worst] = ye;
+      else
+        x[worst] = xr, y[worst] = yr;
     } else if (yr < y[second]) {
       x[worst] = xr, y[worst] = yr;
     } else {
-      const Eigen::Vector3d xc = yr < y[worst] ? Eigen::Vector3d(c + 0.5 * (xr - c)) : Eigen::Vector3d(c + 0.5 * (x[worst] - c));
+      const Eigen::Vector3d xc =
+          yr < y[worst] ? Eigen::Vector3d(c + 0.5 * (xr - c)) : Eigen::Vector3d(c + 0.5 * (x[worst] - c));
       const double yc = f(xc);
       if (yc < std::min(yr, y[worst])) {
         x[worst] = xc, y[worst] = yc;

@@ -9,9 +9,9 @@
 /// docs/orientation.md for why this one and not the principal-axes box or a length from volume and area.
 #pragma once
 
-#include <Eigen/Core>
-
 #include "nodes/artefacts/meshes.h"
+
+#include <Eigen/Core>
 
 namespace polyhex {
 

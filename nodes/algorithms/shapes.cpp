@@ -4,19 +4,19 @@
 /// meshed with openvdb::tools::volumeToMesh (rod with holes, L-block, bent pipe, fandisk-like block).
 #include "nodes/algorithms/shapes.h"
 
+#include "runtime/errors.h"
+
+#include <Eigen/Geometry>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/SignedFloodFill.h>
 #include <openvdb/tools/VolumeToMesh.h>
 
-#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <functional>
 #include <map>
 #include <mutex>
-
-#include "runtime/errors.h"
 
 namespace polyhex {
 namespace {
@@ -92,8 +92,10 @@ void lattice_box_surface(int nx, int ny, int nz, std::vector<Vec3>& V, std::vect
       for (int iu = 0; iu < n[u]; ++iu)
         for (int iw = 0; iw < n[w]; ++iw) {
           int p00 = corner(iu, iw), p10 = corner(iu + 1, iw), p11 = corner(iu + 1, iw + 1), p01 = corner(iu, iw + 1);
-          if (s) add_quad(V, F, p00, p10, p11, p01);
-          else add_quad(V, F, p00, p01, p11, p10);
+          if (s)
+            add_quad(V, F, p00, p10, p11, p01);
+          else
+            add_quad(V, F, p00, p01, p11, p10);
         }
     }
   }
@@ -170,8 +172,11 @@ void collapse_short_edges(std::vector<Vec3>& V, std::vector<Eigen::Vector3i>& F,
           faces_of[a].push_back(f);
         }
         faces_of[b].clear();
-        for (int v : common) faces_of[v].erase(std::remove_if(faces_of[v].begin(), faces_of[v].end(), [&](int f) { return dead[f] != 0; }), faces_of[v].end());
-        faces_of[a].erase(std::remove_if(faces_of[a].begin(), faces_of[a].end(), [&](int f) { return dead[f] != 0; }), faces_of[a].end());
+        for (int v : common)
+          faces_of[v].erase(std::remove_if(faces_of[v].begin(), faces_of[v].end(), [&](int f) { return dead[f] != 0; }),
+                            faces_of[v].end());
+        faces_of[a].erase(std::remove_if(faces_of[a].begin(), faces_of[a].end(), [&](int f) { return dead[f] != 0; }),
+                          faces_of[a].end());
         changed = true;
       }
   }
@@ -206,7 +211,8 @@ SurfaceMesh make_torus(int res, bool bumpy) {
       [bumpy](double u, double v) {
         // Bumps: the tube radius varies by +-20 % (6 lobes around, 4 across), never self-touching.
         double r = kTorusr * (bumpy ? 1.0 + 0.2 * std::cos(6 * u) * std::cos(4 * v) : 1.0);
-        return Vec3((kTorusR + r * std::cos(v)) * std::cos(u), (kTorusR + r * std::cos(v)) * std::sin(u), r * std::sin(v));
+        return Vec3((kTorusR + r * std::cos(v)) * std::cos(u), (kTorusR + r * std::cos(v)) * std::sin(u),
+                    r * std::sin(v));
       },
       bumpy ? "bumpy_torus" : "torus");
 }

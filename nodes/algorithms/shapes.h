@@ -2,10 +2,10 @@
 /// @brief Built-in closed test surfaces, so the default run and the unit tests need no file.
 #pragma once
 
+#include "nodes/artefacts/meshes.h"
+
 #include <string>
 #include <vector>
-
-#include "nodes/artefacts/meshes.h"
 
 namespace polyhex {
 

@@ -1,12 +1,12 @@
 #include "nodes/algorithms/triangle_tree.h"
 
+#include "runtime/errors.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numeric>
 #include <string>
-
-#include "runtime/errors.h"
 
 namespace polyhex {
 
@@ -32,8 +32,8 @@ constexpr int kLeafSize = 4;
 
 }  // namespace
 
-Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                                          const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                          const Eigen::Vector3d& c) {
   const Eigen::Vector3d ab = b - a, ac = c - a;
   // A triangle without area has no interior region: its closest point lies on an edge, and the
   // barycentric divisions below would divide by zero.

@@ -5,17 +5,18 @@
 /// nearest point of a surface (projection, distance constraints).
 #pragma once
 
-#include <Eigen/Core>
-#include <vector>
-
 #include "nodes/artefacts/meshes.h"
+
+#include <Eigen/Core>
+
+#include <vector>
 
 namespace polyhex {
 
 /// Closest point on the triangle (a, b, c) to p (Ericson, Real-Time Collision Detection, 5.1.5).
 /// Degenerate triangles (zero area, zero-length edges) are handled as the union of their edges.
-Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                                          const Eigen::Vector3d& b, const Eigen::Vector3d& c);
+Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                          const Eigen::Vector3d& c);
 
 /// A bounding-volume hierarchy of axis-aligned boxes over triangles, built once (median split on
 /// the longest axis of the centroid bounds), queried concurrently (queries are const).
@@ -39,9 +40,9 @@ class TriangleTree {
 
  private:
   struct Node {
-    Eigen::Vector3d lo, hi;  ///< bounding box of the triangles below
+    Eigen::Vector3d lo, hi;     ///< bounding box of the triangles below
     int left = -1, right = -1;  ///< children; -1 for a leaf
-    int begin = 0, end = 0;  ///< triangle range [begin, end) in tree order, for a leaf
+    int begin = 0, end = 0;     ///< triangle range [begin, end) in tree order, for a leaf
   };
   int build(int begin, int end, const std::vector<Eigen::Vector3d>& centroid);
   static double box_sq_distance(const Node& n, const Eigen::Vector3d& p);

@@ -3,15 +3,15 @@
 /// and the consistency check the writers and the cache codec apply before they trust the groups.
 #pragma once
 
+#include "nodes/artefacts/hex_topology.h"
+#include "nodes/artefacts/meshes.h"
+
 #include <algorithm>
 #include <array>
 #include <cctype>
 #include <set>
 #include <string>
 #include <vector>
-
-#include "nodes/artefacts/hex_topology.h"
-#include "nodes/artefacts/meshes.h"
 
 namespace polyhex {
 

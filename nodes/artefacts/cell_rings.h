@@ -1,7 +1,7 @@
 /// @file cell_rings.h
 /// @brief Vertex regions of a cell mesh (tets or hexes, one row of vertex indices per cell) grown by rings of
-/// cells, and the cells at each vertex of a region: the free vertices of the untangling steps (nodes/optimize/untangle_global.cpp for hexes,
-/// nodes/position_deform/untangle_map.cpp for the PolyCube map's tets).
+/// cells, and the cells at each vertex of a region: the free vertices of the untangling steps
+/// (nodes/optimize/untangle_global.cpp for hexes, nodes/position_deform/untangle_map.cpp for the PolyCube map's tets).
 #pragma once
 
 #include <Eigen/Core>
@@ -37,7 +37,7 @@ std::vector<char> cell_ring_region(const Eigen::MatrixBase<Cells>& C, Eigen::Ind
 /// Per free vertex, the (active cell, corner) pairs that use it, in active-cell order: corners[start[i] ..
 /// start[i + 1]) for free vertex i.
 struct CellIncidence {
-  std::vector<int> start;                     ///< #free + 1
+  std::vector<int> start;                    ///< #free + 1
   std::vector<std::pair<int, int>> corners;  ///< (index into `active`, corner k)
 
   /// Σ cell_grad[a].row(k) over the (a, k) pairs of free vertex i: the vertex's gradient assembled from

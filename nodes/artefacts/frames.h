@@ -13,9 +13,10 @@ namespace polyhex {
 /// One frame: the rotation x -> R x from the input's coordinates into the frame's.
 struct FrameCandidate {
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  double energy = 0;    ///< axis-alignment energy of the surface normals in this frame (nodes/orient/orient.h)
-  std::string source;   ///< where it came from: "input", "principal_axes", "normals", "spread" (joined by '+' when several agree)
-  int branch = 0;       ///< the branch that builds the PolyCube in it (1-based, config `branches`), 0 = not run
+  double energy = 0;   ///< axis-alignment energy of the surface normals in this frame (nodes/orient/orient.h)
+  std::string source;  ///< where it came from: "input", "principal_axes", "normals", "spread" (joined by '+' when
+                       ///< several agree)
+  int branch = 0;      ///< the branch that builds the PolyCube in it (1-based, config `branches`), 0 = not run
 };
 
 /// The candidates: [0] is the input frame (R = identity), then the others by

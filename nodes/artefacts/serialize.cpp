@@ -1,12 +1,12 @@
 #include "nodes/artefacts/serialize.h"
 
+#include "graph/node.h"
+#include "nodes/artefacts/boundary_groups.h"
+
 #include <istream>
 #include <limits>
 #include <ostream>
 #include <type_traits>
-
-#include "graph/node.h"
-#include "nodes/artefacts/boundary_groups.h"
 
 namespace polyhex {
 namespace {
@@ -341,15 +341,11 @@ SurfaceMesh read_surface_binary(std::istream& in) {
 TetMesh read_tetmesh_binary(std::istream& in) {
   return read_all(in, "TetMesh", [](Reader& r) { return read_mesh(r, &TetMesh::T); });
 }
-HexMesh read_hexmesh_binary(std::istream& in) {
-  return read_all(in, "HexMesh", read_hex);
-}
+HexMesh read_hexmesh_binary(std::istream& in) { return read_all(in, "HexMesh", read_hex); }
 PolyCubeSegmentation read_segmentation_binary(std::istream& in) {
   return read_all(in, "PolyCubeSegmentation", read_segmentation);
 }
-PolyCubeMap read_polycube_map_binary(std::istream& in) {
-  return read_all(in, "PolyCubeMap", read_map);
-}
+PolyCubeMap read_polycube_map_binary(std::istream& in) { return read_all(in, "PolyCubeMap", read_map); }
 // Frames: u64 count, then per candidate R (9 doubles, row-major), energy, source, i32 branch.
 void write_binary(std::ostream& out, const Frames& f) {
   Writer w(out);

@@ -12,13 +12,13 @@
 /// are then ignored and recomputed.
 #pragma once
 
-#include <cstdint>
-#include <iosfwd>
-
 #include "nodes/artefacts/frames.h"
 #include "nodes/artefacts/meshes.h"
 #include "nodes/artefacts/polycube.h"
 #include "nodes/artefacts/polycube_map.h"
+
+#include <cstdint>
+#include <iosfwd>
 
 namespace polyhex {
 

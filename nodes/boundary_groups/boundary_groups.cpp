@@ -1,16 +1,16 @@
 #include "nodes/boundary_groups/boundary_groups.h"
 
+#include "nodes/algorithms/features.h"
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/algorithms/triangle_tree.h"
+#include "nodes/artefacts/boundary_groups.h"
+#include "runtime/errors.h"
+
 #include <tbb/parallel_for.h>
 
 #include <chrono>
 #include <map>
 #include <string>
-
-#include "nodes/artefacts/boundary_groups.h"
-#include "nodes/algorithms/features.h"
-#include "nodes/algorithms/hex_quality.h"
-#include "nodes/algorithms/triangle_tree.h"
-#include "runtime/errors.h"
 
 namespace polyhex {
 namespace {
@@ -73,16 +73,18 @@ HexMesh add_boundary_groups(const HexMesh& mesh, const PolyCubeMap* map, const S
                        " must be 0 (no patch groups) or in [1, 179] degrees");
   if (p.charts) {
     if (!map || !map->input || !map->segmentation)
-      throw InvalidInput("boundary groups: chart groups need the PolyCube map with its input tets and segmentation "
-                         "(connect `map`, or set charts to false)");
+      throw InvalidInput(
+          "boundary groups: chart groups need the PolyCube map with its input tets and segmentation "
+          "(connect `map`, or set charts to false)");
     const auto& seg = *map->segmentation;
     if (seg.F.rows() == 0 || seg.chart.size() != seg.F.rows())
       throw InvalidInput("boundary groups: the segmentation has " + std::to_string(seg.F.rows()) + " triangles and " +
                          std::to_string(seg.chart.size()) + " chart ids");
   }
   if (p.feature_angle > 0 && (!surface || surface->F.rows() == 0))
-    throw InvalidInput("boundary groups: patch groups need the input surface (connect `surface`, or set "
-                       "feature_angle to 0)");
+    throw InvalidInput(
+        "boundary groups: patch groups need the input surface (connect `surface`, or set "
+        "feature_angle to 0)");
 
   std::vector<int> hex_of, face_of;
   const auto Q = hex_boundary_quads(mesh, &hex_of, &face_of);

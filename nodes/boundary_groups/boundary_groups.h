@@ -19,15 +19,16 @@ namespace polyhex {
 
 struct BoundaryGroupsParams {
   bool charts = true;         ///< one group `chart_<id>` per PolyCube chart (needs a map with its segmentation)
-  double feature_angle = 40;  ///< one group `patch_<id>` per surface patch bounded by edges sharper than this (degrees, [1, 179]; 0 = no patch groups; needs the surface)
+  double feature_angle = 40;  ///< one group `patch_<id>` per surface patch bounded by edges sharper than this (degrees,
+                              ///< [1, 179]; 0 = no patch groups; needs the surface)
 };
 
 struct BoundaryGroupsStats {
-  long boundary_faces = 0;    ///< faces of the `boundary` group
-  int chart_groups = 0;       ///< charts holding at least one boundary face
-  int patch_groups = 0;       ///< surface patches holding at least one boundary face
-  int surface_patches = 0;    ///< patches of the surface at feature_angle
-  long facing_away = 0;       ///< boundary faces whose nearest chart or patch triangle faces the other way (thin walls)
+  long boundary_faces = 0;  ///< faces of the `boundary` group
+  int chart_groups = 0;     ///< charts holding at least one boundary face
+  int patch_groups = 0;     ///< surface patches holding at least one boundary face
+  int surface_patches = 0;  ///< patches of the surface at feature_angle
+  long facing_away = 0;     ///< boundary faces whose nearest chart or patch triangle faces the other way (thin walls)
   double seconds = 0;
 };
 

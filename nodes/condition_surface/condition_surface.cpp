@@ -1,5 +1,13 @@
 #include "nodes/condition_surface/condition_surface.h"
 
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/algorithms/reference_length.h"
+#include "nodes/condition_surface/surface_ops.h"
+#include "nodes/formats/surface_io.h"
+#include "runtime/cancel.h"
+#include "runtime/errors.h"
+#include "runtime/union_find.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -7,14 +15,6 @@
 #include <numeric>
 #include <optional>
 #include <set>
-
-#include "nodes/algorithms/reference_length.h"
-#include "nodes/condition_surface/surface_ops.h"
-#include "nodes/formats/surface_io.h"
-#include "nodes/algorithms/hex_quality.h"
-#include "runtime/cancel.h"
-#include "runtime/errors.h"
-#include "runtime/union_find.h"
 
 namespace polyhex {
 namespace {
@@ -38,13 +38,13 @@ bool repeated_index(const SurfaceMesh& s, Eigen::Index f) {
 // their undirected edges, the manifold neighbours, the fans around each vertex and a consistent
 // orientation where one exists.
 struct Topology {
-  std::vector<char> used;        // #F: the triangle takes part (not degenerate, first of its duplicates)
+  std::vector<char> used;  // #F: the triangle takes part (not degenerate, first of its duplicates)
   long degenerate = 0, duplicates = 0;
   long boundary_edges = 0, nonmanifold_edges = 0;
   std::vector<std::pair<int, int>> boundary;  // boundary edges (vertex pairs)
-  std::vector<int> nb;           // #F*3: opposite half-edge across a manifold edge, -1 otherwise
-  std::vector<int> fan;          // #F*3: fan id of every corner (union over manifold edges)
-  std::vector<char> flip;        // #F: flip to orient consistently
+  std::vector<int> nb;                        // #F*3: opposite half-edge across a manifold edge, -1 otherwise
+  std::vector<int> fan;                       // #F*3: fan id of every corner (union over manifold edges)
+  std::vector<char> flip;                     // #F: flip to orient consistently
   bool orientable = true;
   long components = 0;
 
@@ -83,9 +83,8 @@ struct Topology {
         h.push_back({(uint64_t(std::min(a, b)) << 32) | std::max(a, b), int(3 * f + k)});
       }
     }
-    std::sort(h.begin(), h.end(), [](const HalfEdge& x, const HalfEdge& y) {
-      return x.key != y.key ? x.key < y.key : x.he < y.he;
-    });
+    std::sort(h.begin(), h.end(),
+              [](const HalfEdge& x, const HalfEdge& y) { return x.key != y.key ? x.key < y.key : x.he < y.he; });
     nb.assign(size_t(3 * nf), -1);
     UnionFind faces{size_t(nf)};
     for (size_t i = 0; i < h.size();) {
@@ -283,10 +282,14 @@ int split_pinches(SurfaceMesh& s, const Topology& topo) {
 
 const char* repair_name(SurfaceRepair r) {
   switch (r) {
-    case SurfaceRepair::local: return "local";
-    case SurfaceRepair::levelset: return "levelset";
-    case SurfaceRepair::alpha_wrap: return "alpha_wrap";
-    default: return "auto";
+    case SurfaceRepair::local:
+      return "local";
+    case SurfaceRepair::levelset:
+      return "levelset";
+    case SurfaceRepair::alpha_wrap:
+      return "alpha_wrap";
+    default:
+      return "auto";
   }
 }
 
@@ -414,28 +417,39 @@ namespace {
 
 /// Whether the surface is remeshed to size.
 bool too_fine(const ConditionParams& p, const SurfaceDiagnosis& d) {
-  return p.remesh == RemeshWhen::always || (p.remesh == RemeshWhen::finer && d.tessellation_ratio > p.remesh_finer_than);
+  return p.remesh == RemeshWhen::always ||
+         (p.remesh == RemeshWhen::finer && d.tessellation_ratio > p.remesh_finer_than);
 }
 
 /// One conditioning run: the input, its sizes, the surface being repaired (m) and what was done to it.
 class Conditioner {
  public:
-  Conditioner(const SurfaceMesh& s, SurfaceRepair repair, const ConditionParams& p, ConditionReport& report, double diag)
-      : s_(s), name_(s.source), repair_(repair), p_(p), report_(report), H_(p.hex_edge_length * diag),
-        T_(p.edge_length * diag), m_(s) {}
+  Conditioner(const SurfaceMesh& s, SurfaceRepair repair, const ConditionParams& p, ConditionReport& report,
+              double diag)
+      : s_(s),
+        name_(s.source),
+        repair_(repair),
+        p_(p),
+        report_(report),
+        H_(p.hex_edge_length * diag),
+        T_(p.edge_length * diag),
+        m_(s) {}
 
   /// The conditioned surface for a defective or too finely tessellated input (condition_surface's
   /// steps after the diagnosis). \throw InvalidInput as condition_surface documents
   SurfaceMesh run(const std::vector<std::string>& defects) {
     if (!defects.empty()) repair_defects(defects);
     // A wrap is remeshed too: its triangles follow the wrapping, not the size the tets need.
-    if (!report_.remeshed && (defects.empty() || report_.repair == "alpha_wrap" || too_fine(p_, *current_)) && !remesh_to_size())
-      report_.warnings.push_back(name_ + ": remeshing to size leaves crossing triangles down to half the tet "
-                                         "edge: the surface keeps its own tessellation");
+    if (!report_.remeshed && (defects.empty() || report_.repair == "alpha_wrap" || too_fine(p_, *current_)) &&
+        !remesh_to_size())
+      report_.warnings.push_back(name_ +
+                                 ": remeshing to size leaves crossing triangles down to half the tet "
+                                 "edge: the surface keeps its own tessellation");
     report_.output = current_ ? *current_ : report_.input;  // no diagnosis: m is still the input
     if (report_.output.defective())
-      throw InvalidInput(name_ + ": " + (defects.empty() ? std::string("remeshing to size") : join(defects) + ": " + how_) +
-                         (report_.remeshed ? " and remeshing to size" : "") + " leaves " + join(report_.output.defects()));
+      throw InvalidInput(
+          name_ + ": " + (defects.empty() ? std::string("remeshing to size") : join(defects) + ": " + how_) +
+          (report_.remeshed ? " and remeshing to size" : "") + " leaves " + join(report_.output.defects()));
     SurfaceReadReport oriented;
     check_and_repair_surface(m_, name_, oriented);
     check_thickness(defects);
@@ -508,7 +522,8 @@ class Conditioner {
     bool clean = false;
     for (SurfaceRepair r : order) {
       if ((clean = attempt(r))) break;
-      failed.push_back(report_.repair + ": " + (current_ && current_->defective() ? "leaves " + join(current_->defects()) : how_));
+      failed.push_back(report_.repair + ": " +
+                       (current_ && current_->defective() ? "leaves " + join(current_->defects()) : how_));
     }
     if (!clean)
       throw InvalidInput(name_ + ": " + join(defects) + "; no repair leaves a clean surface (" + join(failed) + ")" +
@@ -520,7 +535,8 @@ class Conditioner {
   void check_thickness(const std::vector<std::string>& defects) const {
     const double thickness = report_.output.thickness;
     if (thickness < p_.min_thickness)
-      throw InvalidInput(name_ + ": " + (defects.empty() ? std::string("the surface") : "the " + report_.repair + " repair") +
+      throw InvalidInput(name_ + ": " +
+                         (defects.empty() ? std::string("the surface") : "the " + report_.repair + " repair") +
                          " encloses a solid thinner than a hex edge (4 volume / area = " + fixed(thickness, 3) +
                          " hex edges, min_thickness " + fixed(p_.min_thickness) + "): nothing to mesh with hexes");
   }
@@ -538,13 +554,14 @@ class Conditioner {
                          " surface strays " + fixed(report_.deviation_to_original) +
                          " hex edges from the original, more than max_deviation " + fixed(p_.max_deviation));
     const std::string cost = "the result is within " + fixed(report_.deviation_to_original) +
-                             " hex edges of the original (mean " + fixed(dist.mean_ba / H_, 3) + "), the original within " +
-                             fixed(report_.deviation_from_original) + " of the result (mean " + fixed(dist.mean_ab / H_, 3) +
-                             "); " + std::to_string(s_.F.rows()) + " -> " + std::to_string(m_.F.rows()) + " triangles";
+                             " hex edges of the original (mean " + fixed(dist.mean_ba / H_, 3) +
+                             "), the original within " + fixed(report_.deviation_from_original) +
+                             " of the result (mean " + fixed(dist.mean_ab / H_, 3) + "); " +
+                             std::to_string(s_.F.rows()) + " -> " + std::to_string(m_.F.rows()) + " triangles";
     if (!defects.empty())
-      report_.warnings.push_back(name_ + ": " + join(defects) + ": repaired by " + how_ +
-                                 (report_.remeshed ? ", then remeshed to " + fixed(report_.remesh_edge) + " tet edges" : "") +
-                                 ": " + cost);
+      report_.warnings.push_back(
+          name_ + ": " + join(defects) + ": repaired by " + how_ +
+          (report_.remeshed ? ", then remeshed to " + fixed(report_.remesh_edge) + " tet edges" : "") + ": " + cost);
     else
       report_.warnings.push_back(name_ + ": tessellation " + fixed(report_.input.tessellation_ratio, 1) +
                                  " times finer than the tet size: remeshed to " + fixed(report_.remesh_edge) +

@@ -1,7 +1,8 @@
 /// @file condition_surface_node.cpp
 /// @brief Binding of `condition_surface/{auto,local,levelset,alpha_wrap}`: SurfaceMesh -> SurfaceMesh.
-#include "graph/node.h"
 #include "nodes/condition_surface/condition_surface.h"
+
+#include "graph/node.h"
 
 namespace polyhex {
 namespace {
@@ -30,16 +31,19 @@ void diagnosis_metrics(const SurfaceDiagnosis& d, json& m) {
 
 NodeSpec condition_node(const std::string& variant, SurfaceRepair repair, const std::string& what) {
   return make_node<ConditionParams>(
-      "condition_surface/" + variant, "Diagnoses the input surface and repairs its defects (" + what +
-                                          "); remeshes it to the tet size where it is much finer",
+      "condition_surface/" + variant,
+      "Diagnoses the input surface and repairs its defects (" + what +
+          "); remeshes it to the tet size where it is much finer",
       ParamSet<ConditionParams>()
-          .add_enum("policy", &ConditionParams::policy, {{DefectPolicy::repair, "auto"}, {DefectPolicy::strict, "strict"}},
-                      "auto: repair defects with a warning; strict: refuse any defect")
+          .add_enum("policy", &ConditionParams::policy,
+                    {{DefectPolicy::repair, "auto"}, {DefectPolicy::strict, "strict"}},
+                    "auto: repair defects with a warning; strict: refuse any defect")
           .add_enum("remesh", &ConditionParams::remesh,
                     {{RemeshWhen::finer, "auto"}, {RemeshWhen::never, "never"}, {RemeshWhen::always, "always"}},
-                      "remesh to the tet size: auto (when finer than remesh_finer_than), never, always")
+                    "remesh to the tet size: auto (when finer than remesh_finer_than), never, always")
           .add("edge_length", &ConditionParams::edge_length,
-               "tet edge, fraction of the reference length (the tetrahedralize node's; configs: ${tet_edge})", 0.002, 0.5)
+               "tet edge, fraction of the reference length (the tetrahedralize node's; configs: ${tet_edge})", 0.002,
+               0.5)
           .add("hex_edge_length", &ConditionParams::hex_edge_length,
                "hex edge, fraction of the reference length (unit of the costs and bounds; configs: ${hex_edge})", 0.001,
                0.5)

@@ -1,6 +1,8 @@
 #include "nodes/condition_surface/surface_ops.h"
 
 #define CGAL_EIGEN3_ENABLED 1
+#include "runtime/errors.h"
+
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/border.h>
 #include <CGAL/Polygon_mesh_processing/detect_features.h>
@@ -20,8 +22,6 @@
 #include <iterator>
 #include <mutex>
 #include <vector>
-
-#include "runtime/errors.h"
 
 namespace polyhex {
 namespace {

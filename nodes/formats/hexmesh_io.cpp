@@ -1,11 +1,11 @@
 #include "nodes/formats/hexmesh_io.h"
 
-#include <algorithm>
-#include <map>
-
 #include "nodes/artefacts/boundary_groups.h"
 #include "nodes/formats/solver_formats.h"
 #include "runtime/errors.h"
+
+#include <algorithm>
+#include <map>
 
 namespace polyhex {
 
@@ -35,8 +35,10 @@ void write_hexmesh(const HexMesh& mesh, const std::filesystem::path& path, const
   if (const std::string problem = boundary_groups_problem(mesh); !problem.empty())
     throw InvalidInput(path.string() + ": " + problem + "; no file written");
   switch (choose_mesh_format(format, path, true)) {
-    case MeshFormat::Exodus: return write_exodus_hex(mesh, path);
-    case MeshFormat::Abaqus: return write_abaqus_hex(mesh, path);
+    case MeshFormat::Exodus:
+      return write_exodus_hex(mesh, path);
+    case MeshFormat::Abaqus:
+      return write_abaqus_hex(mesh, path);
     default:
       return write_cell_mesh(path, mesh.V, CellBlock{mesh.H.data(), mesh.H.rows(), 8}, kHexKind, format, cell_data,
                              face_groups(mesh));

@@ -10,12 +10,12 @@
 /// (mesh_formats.h says which).
 #pragma once
 
+#include "nodes/artefacts/meshes.h"
+#include "nodes/formats/mesh_formats.h"
+
 #include <filesystem>
 #include <string>
 #include <vector>
-
-#include "nodes/artefacts/meshes.h"
-#include "nodes/formats/mesh_formats.h"
 
 namespace polyhex {
 

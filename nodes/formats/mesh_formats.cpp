@@ -1,14 +1,14 @@
 #include "nodes/formats/mesh_formats.h"
 
+#include "nodes/formats/text_cursor.h"
+#include "runtime/atomic_file.h"
+#include "runtime/errors.h"
+
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <type_traits>
 #include <unordered_map>
-
-#include "nodes/formats/text_cursor.h"
-#include "runtime/atomic_file.h"
-#include "runtime/errors.h"
 
 namespace polyhex {
 
@@ -59,8 +59,8 @@ std::vector<int> FaceGroups::family_ids(const std::string& family) const {
 namespace io_detail {
 
 void write_buffer(const std::filesystem::path& path, const std::string& buffer, bool binary) {
-  write_file_atomic(path, [&](std::ostream& os) { os.write(buffer.data(), std::streamsize(buffer.size())); },
-                    binary);
+  write_file_atomic(
+      path, [&](std::ostream& os) { os.write(buffer.data(), std::streamsize(buffer.size())); }, binary);
 }
 
 void append_vtk_header(std::string& out, const std::string& title, bool binary, const std::string& dataset) {
@@ -105,8 +105,10 @@ void append_vtk_array(std::string& out, const std::string& name, const std::vect
     if (binary) {
       append_big_endian<Stored>(out, Stored(v));
     } else {
-      if constexpr (std::is_same_v<T, int>) append_int(out, v);
-      else append_double(out, v);
+      if constexpr (std::is_same_v<T, int>)
+        append_int(out, v);
+      else
+        append_double(out, v);
       out += '\n';
     }
   }
@@ -269,7 +271,7 @@ void write_gmsh_cells(const std::filesystem::path& path, const RowMatrixX3d& V, 
   std::vector<std::vector<int>> groups_of(static_cast<size_t>(nq));
   for (size_t g = 0; g < faces.groups.size(); ++g)
     for (int r : faces.groups[g].rows) groups_of[size_t(r)].push_back(int(g) + 1);  // physical tags 1..
-  std::map<std::vector<int>, std::vector<int>> entity_quads;  // physical tags -> quad rows
+  std::map<std::vector<int>, std::vector<int>> entity_quads;                        // physical tags -> quad rows
   for (Eigen::Index q = 0; q < nq; ++q)
     if (!groups_of[size_t(q)].empty()) entity_quads[groups_of[size_t(q)]].push_back(int(q));
   long quads_written = 0;
@@ -355,9 +357,7 @@ RowMatrixX3d to_matrix(const std::vector<double>& xyz) {
   return V;
 }
 
-std::string plural(size_t n, const std::string& what) {
-  return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
-}
+std::string plural(size_t n, const std::string& what) { return std::to_string(n) + " " + what + (n == 1 ? "" : "s"); }
 
 // The values of a legacy VTK data block, ASCII or binary (big-endian).
 struct VtkValues {
@@ -379,14 +379,22 @@ struct VtkValues {
       for (size_t i = 0; i < n; ++i) out.push_back(text.real(what));
       return;
     }
-    if (type == "double") read_binary<double>(n, out, what);
-    else if (type == "float") read_binary<float>(n, out, what);
-    else if (type == "int" || type == "vtktypeint32") read_binary<int32_t>(n, out, what);
-    else if (type == "unsigned_int") read_binary<uint32_t>(n, out, what);
-    else if (type == "long" || type == "vtktypeint64") read_binary<int64_t>(n, out, what);
-    else if (type == "short") read_binary<int16_t>(n, out, what);
-    else if (type == "unsigned_short") read_binary<uint16_t>(n, out, what);
-    else text.fail("unsupported binary data type `" + type + "` in " + what);
+    if (type == "double")
+      read_binary<double>(n, out, what);
+    else if (type == "float")
+      read_binary<float>(n, out, what);
+    else if (type == "int" || type == "vtktypeint32")
+      read_binary<int32_t>(n, out, what);
+    else if (type == "unsigned_int")
+      read_binary<uint32_t>(n, out, what);
+    else if (type == "long" || type == "vtktypeint64")
+      read_binary<int64_t>(n, out, what);
+    else if (type == "short")
+      read_binary<int16_t>(n, out, what);
+    else if (type == "unsigned_short")
+      read_binary<uint16_t>(n, out, what);
+    else
+      text.fail("unsupported binary data type `" + type + "` in " + what);
     for (size_t i = 0; i < n; ++i)
       if (!std::isfinite(out[i])) text.fail(std::string(what) + " " + std::to_string(i) + " is not finite");
   }
@@ -406,7 +414,8 @@ long long count_field(TextCursor& c, const std::vector<std::string_view>& w, siz
   if (w.size() <= i || !io_detail::parse_int(w[i], n) || n < 0) c.fail("expected " + what + " (a count)");
   // Every counted item takes at least a byte: a larger count is forged (and 3 n could overflow).
   if (static_cast<unsigned long long>(n) > c.remaining() + 1)
-    c.fail(what + " " + std::to_string(n) + " is more than the " + std::to_string(c.remaining()) + " bytes left in the file");
+    c.fail(what + " " + std::to_string(n) + " is more than the " + std::to_string(c.remaining()) +
+           " bytes left in the file");
   return n;
 }
 
@@ -429,9 +438,12 @@ CellsRead read_vtk_cells(const std::filesystem::path& path, int vtk_type, int no
   if (!c.line(l)) c.fail("truncated: no title line");
   if (!c.next_line(l)) c.fail("truncated: expected ASCII or BINARY");
   bool binary;
-  if (l == "ASCII") binary = false;
-  else if (l == "BINARY") binary = true;
-  else c.fail("expected ASCII or BINARY, got `" + std::string(l) + "`");
+  if (l == "ASCII")
+    binary = false;
+  else if (l == "BINARY")
+    binary = true;
+  else
+    c.fail("expected ASCII or BINARY, got `" + std::string(l) + "`");
   std::vector<std::string_view> w;
   if (!c.next_line(l)) c.fail("truncated: expected DATASET UNSTRUCTURED_GRID");
   io_detail::split_blanks(l, w);
@@ -522,13 +534,26 @@ CellsRead read_medit_cells(const std::filesystem::path& path, const std::string&
   const std::string data = io_detail::load_file(path);
   TextCursor c(data, file, '#');
   // Entries per element of the sections we skip (vertex indices + reference).
-  static const std::map<std::string, int, std::less<>> skip = {
-      {"Vertices", 4},         {"Edges", 3},         {"Triangles", 4},        {"Quadrilaterals", 5},
-      {"Tetrahedra", 5},       {"Hexahedra", 9},     {"Prisms", 7},           {"Pyramids", 6},
-      {"Corners", 1},          {"Ridges", 1},        {"RequiredVertices", 1}, {"RequiredEdges", 1},
-      {"RequiredTriangles", 1}, {"RequiredQuadrilaterals", 1}, {"Normals", 3}, {"Tangents", 3},
-      {"NormalAtVertices", 2}, {"TangentAtVertices", 2}, {"NormalAtTriangleVertices", 3},
-      {"TangentAtEdgeVertices", 3}};
+  static const std::map<std::string, int, std::less<>> skip = {{"Vertices", 4},
+                                                               {"Edges", 3},
+                                                               {"Triangles", 4},
+                                                               {"Quadrilaterals", 5},
+                                                               {"Tetrahedra", 5},
+                                                               {"Hexahedra", 9},
+                                                               {"Prisms", 7},
+                                                               {"Pyramids", 6},
+                                                               {"Corners", 1},
+                                                               {"Ridges", 1},
+                                                               {"RequiredVertices", 1},
+                                                               {"RequiredEdges", 1},
+                                                               {"RequiredTriangles", 1},
+                                                               {"RequiredQuadrilaterals", 1},
+                                                               {"Normals", 3},
+                                                               {"Tangents", 3},
+                                                               {"NormalAtVertices", 2},
+                                                               {"TangentAtVertices", 2},
+                                                               {"NormalAtTriangleVertices", 3},
+                                                               {"TangentAtEdgeVertices", 3}};
   CellsRead r;
   std::vector<double> xyz;
   std::vector<long long> raw;  // 1-based indices, checked once the vertex count is known
@@ -631,8 +656,8 @@ CellsRead read_gmsh_cells(const std::filesystem::path& path, int gmsh_type, int 
 
   std::unordered_map<long long, int> node_index;
   std::vector<double> xyz;
-  std::vector<long long> raw;      // node tags of kept elements
-  std::vector<int> raw_line;       // line of each kept element
+  std::vector<long long> raw;  // node tags of kept elements
+  std::vector<int> raw_line;   // line of each kept element
   std::map<long long, size_t> ignored;
   bool have_nodes = false, have_elements = false;
 
@@ -756,12 +781,17 @@ CellsRead read_gmsh_cells(const std::filesystem::path& path, int gmsh_type, int 
 void write_cell_mesh(const std::filesystem::path& path, const RowMatrixX3d& V, CellBlock cells, const CellKind& kind,
                      const std::string& format, const CellData& cell_data, const FaceGroups& faces) {
   switch (choose_mesh_format(format, path)) {
-    case MeshFormat::VtkAscii: return write_vtk_cells(path, V, cells, kind.vtk_type, false, cell_data, faces);
-    case MeshFormat::VtkBinary: return write_vtk_cells(path, V, cells, kind.vtk_type, true, cell_data, faces);
-    case MeshFormat::Medit: return write_medit_cells(path, V, cells, kind.medit_section, faces);
-    case MeshFormat::Gmsh: return write_gmsh_cells(path, V, cells, kind.gmsh_type, faces);
+    case MeshFormat::VtkAscii:
+      return write_vtk_cells(path, V, cells, kind.vtk_type, false, cell_data, faces);
+    case MeshFormat::VtkBinary:
+      return write_vtk_cells(path, V, cells, kind.vtk_type, true, cell_data, faces);
+    case MeshFormat::Medit:
+      return write_medit_cells(path, V, cells, kind.medit_section, faces);
+    case MeshFormat::Gmsh:
+      return write_gmsh_cells(path, V, cells, kind.gmsh_type, faces);
     case MeshFormat::Exodus:
-    case MeshFormat::Abaqus: break;  // not chosen without solver_formats
+    case MeshFormat::Abaqus:
+      break;  // not chosen without solver_formats
   }
 }
 

@@ -8,12 +8,12 @@
 /// are (checked against hexcheck.py, which reads Medit `Hexahedra` rows as VTK order).
 #pragma once
 
+#include "nodes/artefacts/meshes.h"
+
 #include <filesystem>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include "nodes/artefacts/meshes.h"
 
 namespace polyhex {
 

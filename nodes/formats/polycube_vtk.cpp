@@ -1,8 +1,8 @@
 #include "nodes/formats/polycube_vtk.h"
 
-#include <vector>
-
 #include "nodes/formats/surface_io.h"
+
+#include <vector>
 
 namespace polyhex {
 

@@ -3,9 +3,9 @@
 /// segmentation; the map's saver).
 #pragma once
 
-#include <filesystem>
-
 #include "nodes/artefacts/polycube.h"
+
+#include <filesystem>
 
 namespace polyhex {
 

@@ -1,17 +1,17 @@
 #include "nodes/formats/solver_formats.h"
 
+#include "nodes/artefacts/boundary_groups.h"
+#include "nodes/formats/mesh_formats.h"
+#include "nodes/formats/text_cursor.h"
+#include "runtime/atomic_file.h"
+#include "runtime/errors.h"
+
 #include <exodusII.h>
 
 #include <algorithm>
 #include <mutex>
 #include <string>
 #include <vector>
-
-#include "nodes/artefacts/boundary_groups.h"
-#include "nodes/formats/mesh_formats.h"
-#include "nodes/formats/text_cursor.h"
-#include "runtime/atomic_file.h"
-#include "runtime/errors.h"
 
 namespace polyhex {
 namespace {
@@ -34,8 +34,10 @@ std::array<int, 6> face_numbers(const int (&table)[6][4]) {
   return out;
 }
 
-constexpr int kExodusHexSides[6][4] = {{1, 2, 6, 5}, {2, 3, 7, 6}, {3, 4, 8, 7}, {1, 5, 8, 4}, {1, 4, 3, 2}, {5, 6, 7, 8}};
-constexpr int kAbaqusHexFaces[6][4] = {{1, 2, 3, 4}, {5, 8, 7, 6}, {1, 5, 6, 2}, {2, 6, 7, 3}, {3, 7, 8, 4}, {4, 8, 5, 1}};
+constexpr int kExodusHexSides[6][4] = {{1, 2, 6, 5}, {2, 3, 7, 6}, {3, 4, 8, 7},
+                                       {1, 5, 8, 4}, {1, 4, 3, 2}, {5, 6, 7, 8}};
+constexpr int kAbaqusHexFaces[6][4] = {{1, 2, 3, 4}, {5, 8, 7, 6}, {1, 5, 6, 2},
+                                       {2, 6, 7, 3}, {3, 7, 8, 4}, {4, 8, 5, 1}};
 
 /// An open Exodus file, closed on every path out; each call checked.
 class ExodusFile {

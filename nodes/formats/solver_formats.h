@@ -5,10 +5,10 @@
 /// numbers differ, converted by the tables below.
 #pragma once
 
+#include "nodes/artefacts/meshes.h"
+
 #include <array>
 #include <filesystem>
-
-#include "nodes/artefacts/meshes.h"
 
 namespace polyhex {
 

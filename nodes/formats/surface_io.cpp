@@ -1,14 +1,14 @@
 #include "nodes/formats/surface_io.h"
 
+#include "nodes/algorithms/shapes.h"
+#include "nodes/formats/text_cursor.h"
+#include "runtime/errors.h"
+#include "runtime/union_find.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <numeric>
-
-#include "nodes/formats/text_cursor.h"
-#include "nodes/algorithms/shapes.h"
-#include "runtime/errors.h"
-#include "runtime/union_find.h"
 
 namespace polyhex {
 
@@ -54,8 +54,9 @@ RawSurface parse_obj(std::string_view text, const std::string& file) {
       for (int k = 1; k <= 3; ++k) {
         double x;
         if (!io_detail::parse_double(w[k], x)) c.fail("expected a vertex coordinate, got `" + std::string(w[k]) + "`");
-        if (!std::isfinite(x)) c.fail("vertex " + std::to_string(s.V.size() / 3 + 1) + " has a non-finite coordinate (`" +
-                                      std::string(w[k]) + "`)");
+        if (!std::isfinite(x))
+          c.fail("vertex " + std::to_string(s.V.size() / 3 + 1) + " has a non-finite coordinate (`" +
+                 std::string(w[k]) + "`)");
         s.V.push_back(x);
       }
     } else if (w[0] == "f") {
@@ -68,7 +69,8 @@ RawSurface parse_obj(std::string_view text, const std::string& file) {
         const long long nv = (long long)(s.V.size() / 3);
         if (i == 0) c.fail("vertex index 0 (OBJ indices start at 1)");
         if (i < 0) {
-          if (nv + i < 0) c.fail("relative vertex index " + std::to_string(i) + " out of range (" + vertex_count(nv) + " so far)");
+          if (nv + i < 0)
+            c.fail("relative vertex index " + std::to_string(i) + " out of range (" + vertex_count(nv) + " so far)");
           idx.push_back(int(nv + i));
         } else {
           if (i > (long long)INT32_MAX) c.fail("vertex index " + std::to_string(i) + " out of range");
@@ -117,7 +119,8 @@ RawSurface parse_off(std::string_view text, const std::string& file) {
   s.V.reserve(3 * c.reserve_hint(nv, 6));
   for (long long i = 0; i < nv; ++i) {
     if (!c.next_line(l))
-      c.fail("truncated: the header announces " + vertex_count(size_t(nv)) + ", the file ends after " + std::to_string(i));
+      c.fail("truncated: the header announces " + vertex_count(size_t(nv)) + ", the file ends after " +
+             std::to_string(i));
     io_detail::split_blanks(l, w);
     if (w.size() < 3) c.fail("vertex " + std::to_string(i) + " needs 3 coordinates, has " + std::to_string(w.size()));
     for (int k = 0; k < 3; ++k) {
@@ -132,7 +135,8 @@ RawSurface parse_off(std::string_view text, const std::string& file) {
   s.F.reserve(3 * c.reserve_hint(nf, 8));
   for (long long f = 0; f < nf; ++f) {
     if (!c.next_line(l))
-      c.fail("truncated: the header announces " + std::to_string(nf) + " faces, the file ends after " + std::to_string(f));
+      c.fail("truncated: the header announces " + std::to_string(nf) + " faces, the file ends after " +
+             std::to_string(f));
     io_detail::split_blanks(l, w);
     long long n;
     if (!io_detail::parse_int(w[0], n))
@@ -145,7 +149,8 @@ RawSurface parse_off(std::string_view text, const std::string& file) {
     idx.clear();
     for (long long k = 1; k <= n; ++k) {
       long long i;
-      if (!io_detail::parse_int(w[size_t(k)], i)) c.fail("expected a vertex index, got `" + std::string(w[size_t(k)]) + "`");
+      if (!io_detail::parse_int(w[size_t(k)], i))
+        c.fail("expected a vertex index, got `" + std::string(w[size_t(k)]) + "`");
       if (i < 0 || i >= nv)
         c.fail("face " + std::to_string(f) + ": vertex index " + std::to_string(i) + " out of range (" +
                vertex_count(size_t(nv)) + ")");
@@ -170,8 +175,7 @@ RawSurface parse_stl_binary(std::string_view data, const std::string& file, uint
     b.skip(12, "triangle normal");
     for (int k = 0; k < 9; ++k) {
       float x = b.get<float>("a triangle record");
-      if (!std::isfinite(x))
-        throw IOError(file + ": triangle " + std::to_string(t) + " has a non-finite coordinate");
+      if (!std::isfinite(x)) throw IOError(file + ": triangle " + std::to_string(t) + " has a non-finite coordinate");
       s.V.push_back(x);
     }
     b.skip(2, "attribute");
@@ -250,8 +254,8 @@ RawSurface parse_stl(std::string_view data, const std::string& file) {
       // A binary file whose header starts with "solid" but has a wrong size: say both.
       if (data.size() >= 84 && data.find('\0') != std::string_view::npos) {
         uint32_t n = BinaryCursor(data, 80, false, file).get<uint32_t>("triangle count");
-        throw IOError(file + ": truncated or corrupt binary STL: size " + std::to_string(data.size()) +
-                      " bytes, but " + std::to_string(n) + " triangles need 84 + 50 * " + std::to_string(n) + " = " +
+        throw IOError(file + ": truncated or corrupt binary STL: size " + std::to_string(data.size()) + " bytes, but " +
+                      std::to_string(n) + " triangles need 84 + 50 * " + std::to_string(n) + " = " +
                       std::to_string(84 + 50 * uint64_t(n)));
       }
       throw;
@@ -271,8 +275,8 @@ RawSurface parse_stl(std::string_view data, const std::string& file) {
 // every other property and element is skipped with its own type.
 
 struct PlyProperty {
-  std::string name, type;   // scalar type, or the item type of a list
-  std::string count_type;   // list count type, "" for a scalar
+  std::string name, type;  // scalar type, or the item type of a list
+  std::string count_type;  // list count type, "" for a scalar
 };
 struct PlyElement {
   std::string name;
@@ -281,9 +285,8 @@ struct PlyElement {
 };
 
 bool ply_type_known(const std::string& t) {
-  static const char* known[] = {"char",  "int8",   "uchar",  "uint8",   "short",   "int16",   "ushort",
-                                "uint16", "int",   "int32",  "uint",    "uint32",  "float",   "float32",
-                                "double", "float64"};
+  static const char* known[] = {"char", "int8",  "uchar", "uint8",  "short", "int16",   "ushort", "uint16",
+                                "int",  "int32", "uint",  "uint32", "float", "float32", "double", "float64"};
   for (auto k : known)
     if (t == k) return true;
   return false;
@@ -376,20 +379,23 @@ RawSurface parse_ply(std::string_view data, const std::string& file) {
     // An element without properties takes no bytes, so its count cannot be checked against the file: a
     // forged one (`element x 1000000000000`, fuzzing found it) would spin here for hours.
     if (e.props.empty() && e.count > 0)
-      throw IOError(file + ": PLY element `" + e.name + "` has " + std::to_string(e.count) + " entries but no properties");
+      throw IOError(file + ": PLY element `" + e.name + "` has " + std::to_string(e.count) +
+                    " entries but no properties");
     int xyz[3] = {-1, -1, -1};
     int list = -1;
     if (e.name == "vertex") {
       for (size_t p = 0; p < e.props.size(); ++p)
         for (int k = 0; k < 3; ++k)
           if (e.props[p].count_type.empty() && e.props[p].name == std::string(1, char('x' + k))) xyz[k] = int(p);
-      if (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0) throw IOError(file + ": PLY vertex element has no x, y, z properties");
+      if (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0)
+        throw IOError(file + ": PLY vertex element has no x, y, z properties");
       have_vertex = true;
       nv = e.count;
       s.V.reserve(3 * h.reserve_hint(e.count, e.props.size()));
     } else if (e.name == "face") {
       for (size_t p = 0; p < e.props.size() && list < 0; ++p)
-        if (!e.props[p].count_type.empty() && (e.props[p].name == "vertex_indices" || e.props[p].name == "vertex_index"))
+        if (!e.props[p].count_type.empty() &&
+            (e.props[p].name == "vertex_indices" || e.props[p].name == "vertex_index"))
           list = int(p);
       for (size_t p = 0; p < e.props.size() && list < 0; ++p)
         if (!e.props[p].count_type.empty()) list = int(p);
@@ -406,7 +412,8 @@ RawSurface parse_ply(std::string_view data, const std::string& file) {
           if (ascii && p == 0) line = text.line_no();
           for (int k = 0; k < 3; ++k)
             if (xyz[k] == int(p)) {
-              if (!std::isfinite(x)) throw IOError(file + ": vertex " + std::to_string(i) + " has a non-finite coordinate");
+              if (!std::isfinite(x))
+                throw IOError(file + ": vertex " + std::to_string(i) + " has a non-finite coordinate");
               if (s.V.size() < size_t(3 * (i + 1))) s.V.resize(size_t(3 * (i + 1)));  // grows as read
               s.V[size_t(3 * i + k)] = x;
             }
@@ -415,10 +422,12 @@ RawSurface parse_ply(std::string_view data, const std::string& file) {
         double n = values.get(pr.count_type, what + " list count");
         if (ascii && p == 0) line = text.line_no();
         // (bounded before any int conversion: a forged count like 1e16 is not representable)
-        if (n < 0 || n != std::floor(n) || n > double(INT32_MAX)) throw IOError(file + ": " + what + ": bad list count");
+        if (n < 0 || n != std::floor(n) || n > double(INT32_MAX))
+          throw IOError(file + ": " + what + ": bad list count");
         if (int(p) == list) {
-          if (n < 3) throw IOError(file + ": face " + std::to_string(i) + " has " + std::to_string(int(n)) +
-                                   " vertices (at least 3 needed)");
+          if (n < 3)
+            throw IOError(file + ": face " + std::to_string(i) + " has " + std::to_string(int(n)) +
+                          " vertices (at least 3 needed)");
           idx.clear();
           for (int k = 0; k < int(n); ++k) {
             double v = values.get(pr.type, what);
@@ -494,8 +503,8 @@ class SurfaceChecker {
     return s;
   }
   std::string point(int v) const {
-    return "(" + std::to_string(m_.V(v, 0)) + ", " + std::to_string(m_.V(v, 1)) + ", " +
-           std::to_string(m_.V(v, 2)) + ")";
+    return "(" + std::to_string(m_.V(v, 0)) + ", " + std::to_string(m_.V(v, 1)) + ", " + std::to_string(m_.V(v, 2)) +
+           ")";
   }
 
   void check_repeated() const {
@@ -541,7 +550,8 @@ class SurfaceChecker {
     std::vector<int> order = sorted_vertices();
     std::vector<int> rep(order.size());
     for (size_t i = 0; i < order.size(); ++i)
-      rep[size_t(order[i])] = (i > 0 && m_.V.row(order[i]) == m_.V.row(order[i - 1])) ? rep[size_t(order[i - 1])] : order[i];
+      rep[size_t(order[i])] =
+          (i > 0 && m_.V.row(order[i]) == m_.V.row(order[i - 1])) ? rep[size_t(order[i - 1])] : order[i];
     int merged = 0;
     for (size_t v = 0; v < rep.size(); ++v) merged += rep[v] != int(v);
     welded_ = true;
@@ -585,9 +595,8 @@ class SurfaceChecker {
         uint32_t a = uint32_t(m_.F(f, k)), b = uint32_t(m_.F(f, (k + 1) % 3));
         h[size_t(3 * f + k)] = {(uint64_t(std::min(a, b)) << 32) | std::max(a, b), int(f), k};
       }
-    std::sort(h.begin(), h.end(), [](const HalfEdge& x, const HalfEdge& y) {
-      return x.key != y.key ? x.key < y.key : x.face < y.face;
-    });
+    std::sort(h.begin(), h.end(),
+              [](const HalfEdge& x, const HalfEdge& y) { return x.key != y.key ? x.key < y.key : x.face < y.face; });
     nb_.assign(size_t(3 * nf), -1);
     boundary_ = nonmanifold_ = 0;
     example_boundary_ = example_nonmanifold_ = -1;
@@ -640,7 +649,8 @@ class SurfaceChecker {
     for (Eigen::Index c = 0; c < 3 * nf; ++c) {
       const int v = m_.F.data()[c];
       const int r = uf.find(int(c));
-      if (root[size_t(v)] < 0) root[size_t(v)] = r;
+      if (root[size_t(v)] < 0)
+        root[size_t(v)] = r;
       else if (root[size_t(v)] != r)
         throw InvalidInput(name_ + ": non-manifold vertex " + point(v) +
                            ": its triangles form more than one fan (pinch point), e.g. at " + face(c / 3));

@@ -9,24 +9,24 @@
 /// faces); each is reported as a warning.
 #pragma once
 
+#include "nodes/artefacts/meshes.h"
+#include "nodes/formats/mesh_formats.h"
+
 #include <filesystem>
 #include <string>
 #include <utility>
 #include <vector>
 
-#include "nodes/artefacts/meshes.h"
-#include "nodes/formats/mesh_formats.h"
-
 namespace polyhex {
 
 /// What read_surface found and repaired.
 struct SurfaceReadReport {
-  int vertices = 0;    ///< vertices after repairs
-  int faces = 0;       ///< triangles (polygons are fan-triangulated)
-  int welded = 0;      ///< vertices removed by welding exactly duplicate positions
-  int flipped = 0;     ///< triangles whose orientation differs from the file's
-  int components = 0;  ///< connected components (through shared edges)
-  int genus = 0;       ///< total genus from the Euler characteristic: (2 components - (V - E + F)) / 2
+  int vertices = 0;                   ///< vertices after repairs
+  int faces = 0;                      ///< triangles (polygons are fan-triangulated)
+  int welded = 0;                     ///< vertices removed by welding exactly duplicate positions
+  int flipped = 0;                    ///< triangles whose orientation differs from the file's
+  int components = 0;                 ///< connected components (through shared edges)
+  int genus = 0;                      ///< total genus from the Euler characteristic: (2 components - (V - E + F)) / 2
   std::vector<std::string> warnings;  ///< one line per repair
   /// With keep_defects: the check that failed (the message read_surface would throw), else empty.
   std::vector<std::string> defects;

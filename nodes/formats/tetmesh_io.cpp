@@ -1,12 +1,12 @@
 #include "nodes/formats/tetmesh_io.h"
 
-#include <algorithm>
-#include <array>
-#include <cmath>
-
 #include "nodes/formats/surface_io.h"
 #include "nodes/formats/text_cursor.h"
 #include "runtime/errors.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
 
 namespace polyhex {
 
@@ -40,7 +40,8 @@ CellsRead read_tetgen(const std::filesystem::path& given) {
     xyz.reserve(3 * c.reserve_hint(n, 8));
     for (long long i = 0; i < n; ++i) {
       if (!c.next_line(l))
-        c.fail("truncated: the header announces " + vertex_count(size_t(n)) + ", the file ends after " + std::to_string(i));
+        c.fail("truncated: the header announces " + vertex_count(size_t(n)) + ", the file ends after " +
+               std::to_string(i));
       io_detail::split_blanks(l, w);
       long long idx;
       if (w.size() < 4 || !io_detail::parse_int(w[0], idx)) c.fail("expected `index x y z`");
@@ -58,7 +59,8 @@ CellsRead read_tetgen(const std::filesystem::path& given) {
         xyz.push_back(x);
       }
     }
-    if (c.next_line(l)) c.fail("more data after the " + vertex_count(size_t(n)) + " the header announces (wrong counts?)");
+    if (c.next_line(l))
+      c.fail("more data after the " + vertex_count(size_t(n)) + " the header announces (wrong counts?)");
     r.V = Eigen::Map<const RowMatrixX3d>(xyz.data(), Eigen::Index(n), 3);
   }
   const std::string file = ele_path.string();
@@ -74,7 +76,8 @@ CellsRead read_tetgen(const std::filesystem::path& given) {
   r.cells.reserve(4 * c.reserve_hint(m, 10));
   for (long long t = 0; t < m; ++t) {
     if (!c.next_line(l))
-      c.fail("truncated: the header announces " + std::to_string(m) + " tets, the file ends after " + std::to_string(t));
+      c.fail("truncated: the header announces " + std::to_string(m) + " tets, the file ends after " +
+             std::to_string(t));
     io_detail::split_blanks(l, w);
     if ((long long)w.size() < 1 + per) c.fail("tet needs an index and " + std::to_string(per) + " vertex indices");
     for (int k = 0; k < 4; ++k) {
@@ -101,7 +104,7 @@ long check_tet_faces(const TetMesh& mesh, const std::string& name) {
   struct Face {
     std::array<int, 3> key;  // sorted vertices
     int tet;
-    bool even;               // the outward orientation is an even permutation of key
+    bool even;  // the outward orientation is an even permutation of key
   };
   const Eigen::Index nt = mesh.T.rows();
   std::vector<Face> faces;
@@ -115,9 +118,8 @@ long check_tet_faces(const TetMesh& mesh, const std::string& name) {
       if (!even) std::swap(v[1], v[2]);
       faces.push_back({v, int(t), even});
     }
-  std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) {
-    return a.key != b.key ? a.key < b.key : a.tet < b.tet;
-  });
+  std::sort(faces.begin(), faces.end(),
+            [](const Face& a, const Face& b) { return a.key != b.key ? a.key < b.key : a.tet < b.tet; });
   auto face_str = [&](const std::array<int, 3>& k) {
     return "(" + std::to_string(k[0]) + ", " + std::to_string(k[1]) + ", " + std::to_string(k[2]) + ")";
   };
@@ -136,8 +138,10 @@ long check_tet_faces(const TetMesh& mesh, const std::string& name) {
                          ": the tets overlap (a folded or inverted region)");
     if (j - i == 1) {
       const auto& k = faces[i].key;
-      if (faces[i].even) bf.insert(bf.end(), {k[0], k[1], k[2]});
-      else bf.insert(bf.end(), {k[0], k[2], k[1]});
+      if (faces[i].even)
+        bf.insert(bf.end(), {k[0], k[1], k[2]});
+      else
+        bf.insert(bf.end(), {k[0], k[2], k[1]});
     }
     i = j;
   }

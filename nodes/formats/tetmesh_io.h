@@ -6,21 +6,21 @@
 /// re-oriented by swapping two vertices, with a warning; degenerate tets are an error.
 #pragma once
 
+#include "nodes/artefacts/meshes.h"
+#include "nodes/formats/mesh_formats.h"
+
 #include <filesystem>
 #include <string>
 #include <vector>
-
-#include "nodes/artefacts/meshes.h"
-#include "nodes/formats/mesh_formats.h"
 
 namespace polyhex {
 
 /// What read_tetmesh found and repaired.
 struct TetReadReport {
-  int vertices = 0;    ///< vertices after dropping unused ones
-  int tets = 0;        ///< tetrahedra read
-  int reoriented = 0;  ///< inverted tets whose vertices 2 and 3 were swapped
-  long boundary_faces = 0;  ///< faces used by one tet
+  int vertices = 0;                   ///< vertices after dropping unused ones
+  int tets = 0;                       ///< tetrahedra read
+  int reoriented = 0;                 ///< inverted tets whose vertices 2 and 3 were swapped
+  long boundary_faces = 0;            ///< faces used by one tet
   std::vector<std::string> warnings;  ///< repairs, ignored cell types and sections
 };
 

@@ -152,9 +152,7 @@ void TextCursor::seek(size_t pos, int line) {
   if (line >= 1) line_ = line;
 }
 
-int TextCursor::eof_line() const {
-  return (!text_.empty() && text_.back() == '\n' && line_ > 1) ? line_ - 1 : line_;
-}
+int TextCursor::eof_line() const { return (!text_.empty() && text_.back() == '\n' && line_ > 1) ? line_ - 1 : line_; }
 
 size_t TextCursor::reserve_hint(long long n, size_t min_bytes) const {
   if (n <= 0) return 0;

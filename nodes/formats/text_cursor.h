@@ -5,14 +5,14 @@
 /// so a 50k-triangle file reads in a few milliseconds.
 #pragma once
 
+#include "runtime/errors.h"
+
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include "runtime/errors.h"
 
 namespace polyhex::io_detail {
 
@@ -101,8 +101,7 @@ class BinaryCursor {
     return v;
   }
   void skip(size_t n, std::string_view what) {
-    if (pos_ + n > data_.size())
-      throw IOError(file_ + ": truncated: unexpected end of file in " + std::string(what));
+    if (pos_ + n > data_.size()) throw IOError(file_ + ": truncated: unexpected end of file in " + std::string(what));
     pos_ += n;
   }
   size_t pos() const { return pos_; }

@@ -1,12 +1,16 @@
 // Hex mesh generation from a PolyCube map (paper §6). See hex_extract.h for the method.
 #include "nodes/hex_extract/hex_extract.h"
 
+#include "nodes/algorithms/hex_quality.h"
+#include "runtime/cancel.h"
+#include "runtime/errors.h"
+
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <atomic>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -16,10 +20,6 @@
 #include <unordered_map>
 #include <unordered_set>
 #include <vector>
-
-#include "nodes/algorithms/hex_quality.h"
-#include "runtime/cancel.h"
-#include "runtime/errors.h"
 
 namespace polyhex {
 namespace {
@@ -41,11 +41,11 @@ constexpr int kHexOffset[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
 
 /// A kept hex vertex.
 struct LVertex {
-  Int3 q;                       ///< lattice point
-  Vec3 X;                       ///< position in the input
-  int kind;                     ///< Kind
-  int labels;                   ///< bit l set: lies on a chart with direction label l
-  std::array<int, 4> anchor;    ///< input vertices of the simplex it lies in (-1 padded)
+  Int3 q;                     ///< lattice point
+  Vec3 X;                     ///< position in the input
+  int kind;                   ///< Kind
+  int labels;                 ///< bit l set: lies on a chart with direction label l
+  std::array<int, 4> anchor;  ///< input vertices of the simplex it lies in (-1 padded)
 };
 
 /// A candidate point in a simplex: lattice point, mapped position, orientation of the simplex in the
@@ -59,9 +59,7 @@ struct Candidate {
   int simplex;
 };
 
-double orient(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-  return (b - a).dot((c - a).cross(d - a));
-}
+double orient(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) { return (b - a).dot((c - a).cross(d - a)); }
 
 class Extractor {
  public:
@@ -297,7 +295,8 @@ class Extractor {
               const Vec3 x0 = x - delta_;
               const double c[3] = {orient(x0, p[1], p[2], p[3]) / vol, orient(p[0], x0, p[2], p[3]) / vol,
                                    orient(p[0], p[1], x0, p[3]) / vol};
-              cd.X = c[0] * X(T_(t, 0)) + c[1] * X(T_(t, 1)) + c[2] * X(T_(t, 2)) + (1 - c[0] - c[1] - c[2]) * X(T_(t, 3));
+              cd.X =
+                  c[0] * X(T_(t, 0)) + c[1] * X(T_(t, 1)) + c[2] * X(T_(t, 2)) + (1 - c[0] - c[1] - c[2]) * X(T_(t, 3));
               cd.sign = vol > 0 ? 1 : -1;
               cd.depth = std::min({b[0], b[1], b[2], b[3]});
               cd.simplex = int(t);
@@ -348,9 +347,9 @@ class Extractor {
   // hexes
 
   struct Centroid {
-    Int3 q;    ///< lower corner of the unit cube
-    Vec3 X;    ///< mapped centroid
-    int tet;   ///< tet holding it
+    Int3 q;   ///< lower corner of the unit cube
+    Vec3 X;   ///< mapped centroid
+    int tet;  ///< tet holding it
   };
 
   /// Face-adjacent tets: #T by 4, -1 on the boundary.
@@ -515,8 +514,9 @@ void check_map(const PolyCubeMap& m) {
   if (m.input->T.rows() == 0) throw InvalidInput(name + ": no tets");
   if (!m.U.allFinite()) throw InvalidInput(name + ": a PolyCube position is not finite");
   const auto& s = *m.segmentation;
-  if (s.chart.size() != s.F.rows()) throw InvalidInput(name + ": segmentation has " + std::to_string(s.chart.size()) +
-                                                       " chart ids for " + std::to_string(s.F.rows()) + " triangles");
+  if (s.chart.size() != s.F.rows())
+    throw InvalidInput(name + ": segmentation has " + std::to_string(s.chart.size()) + " chart ids for " +
+                       std::to_string(s.F.rows()) + " triangles");
   for (Eigen::Index f = 0; f < s.F.rows(); ++f) {
     if (s.chart[f] < 0 || s.chart[f] >= Eigen::Index(s.charts.size()))
       throw InvalidInput(name + ": triangle " + std::to_string(f) + " has chart " + std::to_string(s.chart[f]) +

@@ -42,24 +42,27 @@ namespace polyhex {
 constexpr double kMaxLatticePointsPerTet = 1e5;
 
 struct HexExtractParams {
-  double duplicate_distance = 5.0;  ///< in hex edges: same lattice point and mapped this close = duplicate (§6: five), [0.5, 100]
-  double search_margin = 0.5;       ///< lattice units: the hex search visits tets meeting its unit cube grown by this, [1e-3, 2]
-  double perturbation = 1e-7;       ///< lattice units: fixed offset of points for containment tests (breaks ties), [0, 1e-3]
+  double duplicate_distance =
+      5.0;  ///< in hex edges: same lattice point and mapped this close = duplicate (§6: five), [0.5, 100]
+  double search_margin =
+      0.5;  ///< lattice units: the hex search visits tets meeting its unit cube grown by this, [1e-3, 2]
+  double perturbation = 1e-7;  ///< lattice units: fixed offset of points for containment tests (breaks ties), [0, 1e-3]
 };
 
 struct HexExtractStats {
   long hexes = 0;
-  long vertices = 0;                ///< vertices used by the hexes
+  long vertices = 0;                                                                     ///< vertices used by the hexes
   long corner_vertices = 0, edge_vertices = 0, facet_vertices = 0, volume_vertices = 0;  ///< kept, per kind
-  long dropped_conflict = 0;        ///< candidates outside the PolyCube structure (degree <= 0, wrong side of a facet)
-  long dropped_duplicate = 0;       ///< candidates whose lattice point was taken by a vertex within duplicate_distance
-  long exploded_tets = 0;           ///< tets of the map whose lattice box holds more than kMaxLatticePointsPerTet points: not rasterised
-  long unused_vertices = 0;         ///< kept vertices no hex uses (removed from the output)
-  long centroids = 0;               ///< hex centroids generated
-  long unlocated = 0;               ///< hex corners not found by the search (their hex is left out)
-  long hexes_skipped = 0;           ///< centroids without a complete hex
-  long duplicate_hexes = 0;         ///< hexes formed twice from overlapping centroids (one kept)
-  long inverted = 0;                ///< hexes with a corner scaled Jacobian <= 0 (before padding / optimization)
+  long dropped_conflict = 0;   ///< candidates outside the PolyCube structure (degree <= 0, wrong side of a facet)
+  long dropped_duplicate = 0;  ///< candidates whose lattice point was taken by a vertex within duplicate_distance
+  long exploded_tets =
+      0;  ///< tets of the map whose lattice box holds more than kMaxLatticePointsPerTet points: not rasterised
+  long unused_vertices = 0;  ///< kept vertices no hex uses (removed from the output)
+  long centroids = 0;        ///< hex centroids generated
+  long unlocated = 0;        ///< hex corners not found by the search (their hex is left out)
+  long hexes_skipped = 0;    ///< centroids without a complete hex
+  long duplicate_hexes = 0;  ///< hexes formed twice from overlapping centroids (one kept)
+  long inverted = 0;         ///< hexes with a corner scaled Jacobian <= 0 (before padding / optimization)
   double seconds = 0;
 };
 

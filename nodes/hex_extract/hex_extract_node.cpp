@@ -1,7 +1,8 @@
 /// @file hex_extract_node.cpp
 /// @brief Binding of `hex_extract/lattice` (paper §6).
-#include "graph/node.h"
 #include "nodes/hex_extract/hex_extract.h"
+
+#include "graph/node.h"
 
 namespace polyhex {
 namespace {
@@ -15,9 +16,10 @@ const bool registered = register_node(make_node<P>(
     ParamSet<P>()
         .add("duplicate_distance", &P::duplicate_distance,
              "hex edges: a lattice point taken by a vertex mapped this close is a duplicate (paper: 5)", 0.5, 100.0)
-        .add("search_margin", &P::search_margin, "lattice units: the hex search visits tets meeting its cube grown by this",
-             1e-3, 2.0)
-        .add("perturbation", &P::perturbation, "lattice units: fixed tie-breaking offset of containment tests", 0.0, 1e-3),
+        .add("search_margin", &P::search_margin,
+             "lattice units: the hex search visits tets meeting its cube grown by this", 1e-3, 2.0)
+        .add("perturbation", &P::perturbation, "lattice units: fixed tie-breaking offset of containment tests", 0.0,
+             1e-3),
     {{"map", artefact_name<PolyCubeMap>()}}, artefact_name<HexMesh>(),
     [](const P& p, const Inputs& in, NodeContext& ctx) {
       HexExtractStats s;
@@ -41,10 +43,11 @@ const bool registered = register_node(make_node<P>(
       j["seconds"] = s.seconds;
       if (s.exploded_tets > 0)
         ctx.warn(std::to_string(s.exploded_tets) + " tets of the map span more than " +
-                 std::to_string(long(kMaxLatticePointsPerTet)) + " lattice points (the map exploded there): not rasterised");
+                 std::to_string(long(kMaxLatticePointsPerTet)) +
+                 " lattice points (the map exploded there): not rasterised");
       if (s.hexes_skipped > 0)
-        ctx.warn(std::to_string(s.hexes_skipped) + " hex centroids gave no complete hex (" + std::to_string(s.unlocated) +
-                 " corners not found): the mesh has holes there");
+        ctx.warn(std::to_string(s.hexes_skipped) + " hex centroids gave no complete hex (" +
+                 std::to_string(s.unlocated) + " corners not found): the mesh has holes there");
       if (s.inverted > 0)
         ctx.warn(std::to_string(s.inverted) + " extracted hexes are inverted (before padding and optimization)");
       return make_artefact(std::move(out));

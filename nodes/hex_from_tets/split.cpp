@@ -1,5 +1,7 @@
 #include "nodes/hex_from_tets/split.h"
 
+#include "runtime/errors.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -8,8 +10,6 @@
 #include <cmath>
 #include <string>
 #include <vector>
-
-#include "runtime/errors.h"
 
 namespace polyhex {
 

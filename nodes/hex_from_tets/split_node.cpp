@@ -1,7 +1,8 @@
 /// @file split_node.cpp
 /// @brief Binding of `hex_from_tets/split`, the all-hex baseline (4 hexes per tet).
-#include "graph/node.h"
 #include "nodes/hex_from_tets/split.h"
+
+#include "graph/node.h"
 
 namespace polyhex {
 namespace {

@@ -1,8 +1,8 @@
 // Node binding of `read_hex`: reads a hex mesh file (to rerun the late stages, e.g. optimize, on a saved mesh).
-#include <filesystem>
-
 #include "graph/node.h"
 #include "nodes/formats/hexmesh_io.h"
+
+#include <filesystem>
 
 namespace polyhex {
 namespace {

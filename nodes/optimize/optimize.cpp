@@ -1,10 +1,15 @@
 // Hex mesh optimization (paper §6): untangle, max-min scaled Jacobian, shape improvement. See optimize.h.
 #include "nodes/optimize/optimize.h"
-#include "nodes/algorithms/hex_corners.h"
+
 #include "nodes/algorithms/features.h"
+#include "nodes/algorithms/hex_corners.h"
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/algorithms/triangle_tree.h"
 #include "nodes/artefacts/cell_rings.h"
 #include "nodes/artefacts/hex_topology.h"
 #include "nodes/optimize/untangle_global.h"
+#include "runtime/cancel.h"
+#include "runtime/errors.h"
 
 #include <Eigen/SVD>
 #include <tbb/blocked_range.h>
@@ -13,17 +18,12 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <deque>
 #include <cmath>
+#include <deque>
 #include <limits>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include "nodes/algorithms/hex_quality.h"
-#include "nodes/algorithms/triangle_tree.h"
-#include "runtime/cancel.h"
-#include "runtime/errors.h"
 
 namespace polyhex {
 namespace {
@@ -184,7 +184,8 @@ class Optimizer {
     for (Eigen::Index h = 0; h < H_.rows(); ++h)
       if (q[size_t(h)].corner_min <= 0)
         for (int k = 0; k < 8; ++k)
-          if (boundary_[size_t(H_(h, k))] && !released_[size_t(H_(h, k))]) released_[size_t(H_(h, k))] = 1, ++st_.released_vertices;
+          if (boundary_[size_t(H_(h, k))] && !released_[size_t(H_(h, k))])
+            released_[size_t(H_(h, k))] = 1, ++st_.released_vertices;
     untangle();
   }
 
@@ -261,9 +262,9 @@ class Optimizer {
   // local measures of vertex v (at its current position)
 
   struct Local {
-    double sj_min;    ///< min scaled Jacobian (centre term included) of the incident hexes
+    double sj_min;  ///< min scaled Jacobian (centre term included) of the incident hexes
     double sj_sum;
-    int inverted;     ///< incident hexes with a corner scaled Jacobian <= 0
+    int inverted;  ///< incident hexes with a corner scaled Jacobian <= 0
   };
   Local local(int v) const {
     Local l{1.0, 0.0, 0};
@@ -414,16 +415,19 @@ class Optimizer {
   /// same figures for any thread count).
   std::vector<HexSJ> all_quality() const {
     std::vector<HexSJ> q(size_t(H_.rows()));
-    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, H_.rows(), 512), [&](const tbb::blocked_range<Eigen::Index>& r) {
-      for (Eigen::Index h = r.begin(); h < r.end(); ++h) q[size_t(h)] = hex_scaled_jacobian(points(int(h)));
-    });
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, H_.rows(), 512),
+                      [&](const tbb::blocked_range<Eigen::Index>& r) {
+                        for (Eigen::Index h = r.begin(); h < r.end(); ++h)
+                          q[size_t(h)] = hex_scaled_jacobian(points(int(h)));
+                      });
     return q;
   }
 
   /// Recomputes q[h] (hex_scaled_jacobian, as all_quality) and, if given, det[h] (min_corner_det) for the
   /// hexes incident to the vertices with `moved` set: in a sweep only selected vertices move. With every
   /// vertex set it is the full computation. \pre q, det sized #hexes
-  void refresh_quality(std::vector<HexSJ>& q, const std::vector<char>& moved, std::vector<double>* det = nullptr) const {
+  void refresh_quality(std::vector<HexSJ>& q, const std::vector<char>& moved,
+                       std::vector<double>* det = nullptr) const {
     std::vector<char> dirty(size_t(H_.rows()), 0);
     for (size_t v = 0; v < moved.size(); ++v)
       if (moved[v])
@@ -443,14 +447,16 @@ class Optimizer {
   long count_inverted(double* det_min = nullptr) const {
     std::vector<double> dmin(det_min ? size_t(H_.rows()) : 0);
     std::vector<char> inv(size_t(H_.rows()));
-    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, H_.rows(), 512), [&](const tbb::blocked_range<Eigen::Index>& r) {
-      for (Eigen::Index h = r.begin(); h < r.end(); ++h) {
-        const auto p = points(int(h));
-        inv[size_t(h)] = hex_scaled_jacobian(p).corner_min <= 0;
-        if (det_min) dmin[size_t(h)] = min_corner_det(p, scale_[size_t(H_(h, 0))]);
-      }
-    });
-    if (det_min) *det_min = dmin.empty() ? std::numeric_limits<double>::infinity() : *std::min_element(dmin.begin(), dmin.end());
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, H_.rows(), 512),
+                      [&](const tbb::blocked_range<Eigen::Index>& r) {
+                        for (Eigen::Index h = r.begin(); h < r.end(); ++h) {
+                          const auto p = points(int(h));
+                          inv[size_t(h)] = hex_scaled_jacobian(p).corner_min <= 0;
+                          if (det_min) dmin[size_t(h)] = min_corner_det(p, scale_[size_t(H_(h, 0))]);
+                        }
+                      });
+    if (det_min)
+      *det_min = dmin.empty() ? std::numeric_limits<double>::infinity() : *std::min_element(dmin.begin(), dmin.end());
     return long(std::count(inv.begin(), inv.end(), 1));
   }
 
@@ -486,11 +492,14 @@ class Optimizer {
       throw_if_interrupted();
       refresh_quality(q, sel, &det);
       const long n = long(std::count_if(q.begin(), q.end(), [](const HexSJ& x) { return x.corner_min <= 0; }));
-      const double dmin = det.empty() ? std::numeric_limits<double>::infinity() : *std::min_element(det.begin(), det.end());
+      const double dmin =
+          det.empty() ? std::numeric_limits<double>::infinity() : *std::min_element(det.begin(), det.end());
       if (n == 0) return;
       // stalled: the count has not improved for 20 sweeps (the global descent takes over)
-      if (n < best) best = n, stall = 0;
-      else if (++stall >= 20) return;
+      if (n < best)
+        best = n, stall = 0;
+      else if (++stall >= 20)
+        return;
       const double eps = std::sqrt(1e-8 + 0.04 * std::min(dmin, 0.0) * std::min(dmin, 0.0));
       // vertices of inverted hexes and of the hexes around them
       std::fill(sel.begin(), sel.end(), 0);
@@ -505,7 +514,8 @@ class Optimizer {
       ++st_.iterations;
       sweep(sel, [&](int v) {
         const int inv0 = local(v).inverted;
-        return descend(v, [&] { return energy(v, eps); }, [&] { return local(v).inverted <= inv0; }, 0.5);
+        return descend(
+            v, [&] { return energy(v, eps); }, [&] { return local(v).inverted <= inv0; }, 0.5);
       });
     }
   }
@@ -549,7 +559,8 @@ class Optimizer {
         // local measures of that same evaluation
         Local last{};
         auto ok = [&] { return last.inverted <= l0.inverted && last.sj_min > l0.sj_min + 1e-9; };
-        return descend(v, [&] { return soft_min(v, last); }, ok, 0.2, boundary_[size_t(v)] ? nullptr : &avg);
+        return descend(
+            v, [&] { return soft_min(v, last); }, ok, 0.2, boundary_[size_t(v)] ? nullptr : &avg);
       });
       if (moved == 0) {
         if (worst_only) break;
@@ -572,8 +583,9 @@ class Optimizer {
       if (s < p_.target_sj) poor.emplace_back(s, int(h));
     }
     std::sort(poor.begin(), poor.end());
-    static const std::array<Vec3, 8> ref = {Vec3(-.5, -.5, -.5), Vec3(.5, -.5, -.5), Vec3(.5, .5, -.5), Vec3(-.5, .5, -.5),
-                                            Vec3(-.5, -.5, .5),  Vec3(.5, -.5, .5),  Vec3(.5, .5, .5),  Vec3(-.5, .5, .5)};
+    static const std::array<Vec3, 8> ref = {Vec3(-.5, -.5, -.5), Vec3(.5, -.5, -.5), Vec3(.5, .5, -.5),
+                                            Vec3(-.5, .5, -.5),  Vec3(-.5, -.5, .5), Vec3(.5, -.5, .5),
+                                            Vec3(.5, .5, .5),    Vec3(-.5, .5, .5)};
     long moved = 0;
     std::vector<int> region;
     for (const auto& [s0, h] : poor) {
@@ -747,8 +759,11 @@ class Optimizer {
           const Local l = local(v);
           return l.inverted <= l0.inverted && l.sj_min >= l0.sj_min && l.sj_sum >= l0.sj_sum;
         };
-        if (winslow) return descend(v, [&] { return energy(v, 1e-6); }, ok, 0.2);
-        return descend(v, [&] { return -local(v).sj_sum; }, ok, 0.2);
+        if (winslow)
+          return descend(
+              v, [&] { return energy(v, 1e-6); }, ok, 0.2);
+        return descend(
+            v, [&] { return -local(v).sj_sum; }, ok, 0.2);
       });
       if (moved == 0 && !winslow) break;
     }
@@ -850,8 +865,10 @@ HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback,
   if (poor && p.feature_angle > 0 && p.move_boundary) {
     report(0.2, "candidate with crease lines");
     creases = &start(mesh, p);
-    if (creases->st.crease_lines_snapped > 0) improve(*creases);
-    else creases->opt.reset();  // no crease line to follow: the same as the first
+    if (creases->st.crease_lines_snapped > 0)
+      improve(*creases);
+    else
+      creases->opt.reset();  // no crease line to follow: the same as the first
   }
   if (poor && fallback) {
     report(0.27, "fallback candidate");

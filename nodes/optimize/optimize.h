@@ -28,8 +28,8 @@
 ///      Jacobian of all hexes around the moved vertices rises and none inverts (two boundary vertices pressed
 ///      together need to move at once, which (b) cannot do); then (b) again, for `element_iterations` rounds;
 ///  (b'') region smoothing: the interior vertices of the hexes within 0.05 of the minimum and `global_rings`
-///      rings around them move together by L-BFGS on the Winslow energy at ε -> 0 (a barrier against inversion; untangle_global.h
-///      smooth_region), then (b) again; kept only if the minimum rises, for `smooth_iterations`
+///      rings around them move together by L-BFGS on the Winslow energy at ε -> 0 (a barrier against inversion;
+///      untangle_global.h smooth_region), then (b) again; kept only if the minimum rises, for `smooth_iterations`
 ///      rounds and at most until half the time budget is spent, so that (c) always runs (a
 ///      patch of poor hexes, where neither one vertex nor one hex can move alone); boundary vertices stay (the
 ///      energy would slide them across the surface's creases: L-block volume ratio 0.984 -> 0.972);
@@ -40,8 +40,8 @@
 ///      converge slowly where a whole region must drift (hand: 34 sweeps stop at average 0.926, 200 reach
 ///      0.932). At most `average_iterations`, and at most `average_work` / the hexes of the region (the cost
 ///      stays bounded on big meshes); it stops earlier when 25 iterations raise the region's scaled
-///      Jacobians by less than `average_tolerance` per hex. If the minimum fell, (b) runs again, then the vertices of the hexes
-///      still below the old minimum and one ring around them go back to their positions, the set growing
+///      Jacobians by less than `average_tolerance` per hex. If the minimum fell, (b) runs again, then the vertices of
+///      the hexes still below the old minimum and one ring around them go back to their positions, the set growing
 ///      until none is below (up to 10 rounds); kept only if no hex inverts, the minimum does not fall and
 ///      the average rises;
 ///  (c) shape improvement, alternating sweeps: every vertex descends the same Winslow energy (ε -> 0) —
@@ -57,70 +57,79 @@
 /// "creases" of a faceted scan are noise, and following them lowered bunny's minimum 0.50 -> 0.27 and
 /// inverted a hex of dragon.
 /// A move is accepted only if it does not lower the minimum scaled Jacobian of the vertex's hexes and
-/// inverts none of them (in (c) nor their sum; in (a): it lowers the energy and inverts no further corner). Boundary vertices
-/// (on boundary quads) move along the tangent plane of the surface and are projected back onto it
-/// (closest point, AABB tree) after every move.
+/// inverts none of them (in (c) nor their sum; in (a): it lowers the energy and inverts no further corner). Boundary
+/// vertices (on boundary quads) move along the tangent plane of the surface and are projected back onto it (closest
+/// point, AABB tree) after every move.
 #pragma once
-
-#include <array>
 
 #include "nodes/artefacts/meshes.h"
 #include "runtime/progress.h"
 
+#include <array>
+
 namespace polyhex {
 
 struct OptimizeParams {
-  int global_iterations = 15;      ///< ε updates of the global L-BFGS untangling (untangle_global.h), 0 = off, [0, 1000]
-  int global_rings = 3;            ///< global untangling frees the inverted hexes' vertices grown by this many rings, [0, 50]
-  int untangle_iterations = 200;   ///< max untangling sweeps, [0, 10000]
-  int iterations = 30;             ///< max max-min sweeps over all poor hexes (then up to 3x as many over the worst), [0, 10000]
-  int element_iterations = 5;       ///< rounds of whole-hex moves (each followed by max-min sweeps), [0, 1000]
-  int smooth_iterations = 5;        ///< rounds of region smoothing around the worst hexes (kept while the minimum rises), [0, 1000]
-  int shape_iterations = 30;       ///< max global shape-improvement sweeps, [0, 10000]
-  int average_iterations = 300;    ///< L-BFGS iterations of the global average ascent before the shape sweeps, 0 = off, [0, 100000]
-  double average_work = 4e6;       ///< the ascent's iterations are also capped at this / the hexes of its region (bounded cost on big meshes), [0, 1e12]
-  double average_barrier = 0.01;   ///< weight of the Winslow barrier in the ascent's energy (0: none; the result is checked either way), [0, 1]
-  double average_below_sj = 0.9;   ///< the ascent moves the interior vertices of hexes below this scaled Jacobian, [0, 1]
-  int average_rings = 1;           ///< ... grown by this many rings of hexes, [0, 50]
-  double average_tolerance = 1e-3; ///< the ascent stops when 25 iterations raise the scaled Jacobian of its region by less per hex, [0, 1]
-  double shape_tolerance = 3e-4;   ///< the shape sweeps stop when a pair of them raises the average SJ by less, [0, 1]
-  double target_sj = 0.8;          ///< max-min sweeps touch vertices with an incident hex below this SJ, [0, 1]
-  double shape_target_sj = 0.99;   ///< shape sweeps touch vertices with an incident hex below this SJ, [0, 1]
-  double time_budget = 3600.0;     ///< seconds for the whole stage (checked between colour classes), [0, 1e6]: a safety
-                                   ///< net, far above any run measured, since a budget that is hit makes the mesh depend
-                                   ///< on the machine's load; the sweeps' own caps bound the work
-  bool move_boundary = true;       ///< boundary vertices may slide on the surface
-  bool release_boundary = true;    ///< last resort: boundary corners of hexes still inverted after untangling may leave the surface
-  double feature_angle = 40;       ///< if the first result is poor (fallback_below_sj), a second candidate whose boundary vertices
-                                   ///< follow the surface's creases sharper than this (degrees, features.h), 0 = off, [0, 179]
-  double fallback_below_sj = 0.5;  ///< with a fallback mesh: also optimize it when the first result's minimum scaled Jacobian is below this, [0, 1]
+  int global_iterations = 15;  ///< ε updates of the global L-BFGS untangling (untangle_global.h), 0 = off, [0, 1000]
+  int global_rings = 3;  ///< global untangling frees the inverted hexes' vertices grown by this many rings, [0, 50]
+  int untangle_iterations = 200;  ///< max untangling sweeps, [0, 10000]
+  int iterations = 30;  ///< max max-min sweeps over all poor hexes (then up to 3x as many over the worst), [0, 10000]
+  int element_iterations = 5;  ///< rounds of whole-hex moves (each followed by max-min sweeps), [0, 1000]
+  int smooth_iterations =
+      5;  ///< rounds of region smoothing around the worst hexes (kept while the minimum rises), [0, 1000]
+  int shape_iterations = 30;  ///< max global shape-improvement sweeps, [0, 10000]
+  int average_iterations =
+      300;  ///< L-BFGS iterations of the global average ascent before the shape sweeps, 0 = off, [0, 100000]
+  double average_work = 4e6;  ///< the ascent's iterations are also capped at this / the hexes of its region (bounded
+                              ///< cost on big meshes), [0, 1e12]
+  double average_barrier = 0.01;  ///< weight of the Winslow barrier in the ascent's energy (0: none; the result is
+                                  ///< checked either way), [0, 1]
+  double average_below_sj =
+      0.9;                ///< the ascent moves the interior vertices of hexes below this scaled Jacobian, [0, 1]
+  int average_rings = 1;  ///< ... grown by this many rings of hexes, [0, 50]
+  double average_tolerance =
+      1e-3;  ///< the ascent stops when 25 iterations raise the scaled Jacobian of its region by less per hex, [0, 1]
+  double shape_tolerance = 3e-4;  ///< the shape sweeps stop when a pair of them raises the average SJ by less, [0, 1]
+  double target_sj = 0.8;         ///< max-min sweeps touch vertices with an incident hex below this SJ, [0, 1]
+  double shape_target_sj = 0.99;  ///< shape sweeps touch vertices with an incident hex below this SJ, [0, 1]
+  double time_budget = 3600.0;    ///< seconds for the whole stage (checked between colour classes), [0, 1e6]: a safety
+                                  ///< net, far above any run measured, since a budget that is hit makes the mesh depend
+                                  ///< on the machine's load; the sweeps' own caps bound the work
+  bool move_boundary = true;      ///< boundary vertices may slide on the surface
+  bool release_boundary =
+      true;  ///< last resort: boundary corners of hexes still inverted after untangling may leave the surface
+  double feature_angle =
+      40;  ///< if the first result is poor (fallback_below_sj), a second candidate whose boundary vertices
+           ///< follow the surface's creases sharper than this (degrees, features.h), 0 = off, [0, 179]
+  double fallback_below_sj = 0.5;  ///< with a fallback mesh: also optimize it when the first result's minimum scaled
+                                   ///< Jacobian is below this, [0, 1]
 };
 
 struct OptimizeStats {
   double sj_min_before = 0, sj_avg_before = 0;
   double sj_min_after = 0, sj_avg_after = 0;
-  long inverted_before = 0, inverted_after = 0;   ///< hexes with corner scaled Jacobian <= 0
+  long inverted_before = 0, inverted_after = 0;  ///< hexes with corner scaled Jacobian <= 0
   int untangle_sweeps = 0, maxmin_sweeps = 0, shape_sweeps = 0;
-  int average_kept = 0;                ///< 1 when the global average ascent was kept
-  double average_gain = 0;             ///< the average scaled Jacobian it added (with its max-min repair)
-  int element_sweeps = 0;              ///< rounds of whole-hex moves
-  long element_moves = 0;              ///< accepted whole-hex moves
+  int average_kept = 0;                    ///< 1 when the global average ascent was kept
+  double average_gain = 0;                 ///< the average scaled Jacobian it added (with its max-min repair)
+  int element_sweeps = 0;                  ///< rounds of whole-hex moves
+  long element_moves = 0;                  ///< accepted whole-hex moves
   int smooth_rounds = 0, smooth_kept = 0;  ///< region smoothing rounds tried / kept
-  int global_outer = 0;                ///< ε updates of the global untangling
-  long global_lbfgs_iterations = 0;    ///< its L-BFGS iterations
-  long global_free_vertices = 0;       ///< vertices it moved (all runs)
-  long inverted_after_global = -1;     ///< inverted hexes after the global untangling (-1: not run)
-  int optimize_ways = 1;               ///< 2 when the local way left inverted hexes and the global way was tried too
-  bool global_kept = false;            ///< the result is the global way's (fewer inverted hexes or a higher minimum)
-  int iterations = 0;                  ///< all sweeps
-  long moves = 0;                      ///< accepted vertex moves
+  int global_outer = 0;                    ///< ε updates of the global untangling
+  long global_lbfgs_iterations = 0;        ///< its L-BFGS iterations
+  long global_free_vertices = 0;           ///< vertices it moved (all runs)
+  long inverted_after_global = -1;         ///< inverted hexes after the global untangling (-1: not run)
+  int optimize_ways = 1;     ///< 2 when the local way left inverted hexes and the global way was tried too
+  bool global_kept = false;  ///< the result is the global way's (fewer inverted hexes or a higher minimum)
+  int iterations = 0;        ///< all sweeps
+  long moves = 0;            ///< accepted vertex moves
   int colours = 0;
-  double boundary_distance_max = 0;    ///< max distance of a boundary vertex from the surface / bbox diagonal
+  double boundary_distance_max = 0;  ///< max distance of a boundary vertex from the surface / bbox diagonal
   bool time_budget_hit = false;
-  long released_vertices = 0;          ///< boundary vertices released from the surface to untangle (release_boundary)
-  int crease_lines = 0;                ///< crease lines of the surface at feature_angle (at least 1.5 hex edges long)
-  int crease_lines_snapped = 0;        ///< ... with a path of boundary edges on them
-  long crease_vertices = 0;            ///< boundary vertices on a crease line or at a crease corner
+  long released_vertices = 0;    ///< boundary vertices released from the surface to untangle (release_boundary)
+  int crease_lines = 0;          ///< crease lines of the surface at feature_angle (at least 1.5 hex edges long)
+  int crease_lines_snapped = 0;  ///< ... with a path of boundary edges on them
+  long crease_vertices = 0;      ///< boundary vertices on a crease line or at a crease corner
   double seconds = 0;
   double untangle_seconds = 0, global_seconds = 0, maxmin_seconds = 0, element_seconds = 0, smooth_seconds = 0,
          shape_seconds = 0;  ///< per phase
@@ -139,10 +148,10 @@ bool better_result(const OptimizeStats& a, const OptimizeStats& b);
 
 /// What happened to the fallback candidate of optimize_hexes_or_fallback.
 struct FallbackOutcome {
-  bool ran = false;     ///< the fallback was optimized (the first result had inverted hexes or a low minimum)
-  bool kept = false;    ///< its result was returned
-  OptimizeStats stats;  ///< its figures if it ran (after-figures before the shape phase unless kept);
-                        ///< seconds = its own time, its shape pass included if kept
+  bool ran = false;             ///< the fallback was optimized (the first result had inverted hexes or a low minimum)
+  bool kept = false;            ///< its result was returned
+  OptimizeStats stats;          ///< its figures if it ran (after-figures before the shape phase unless kept);
+                                ///< seconds = its own time, its shape pass included if kept
   bool creases_ran = false;     ///< the mesh was optimized again with crease lines (feature_angle)
   bool creases_kept = false;    ///< that result was returned
   OptimizeStats creases_stats;  ///< its figures if it ran, as `stats`

@@ -1,8 +1,12 @@
 // Global untangling by L-BFGS on the regularised Winslow energy. See untangle_global.h.
 #include "nodes/optimize/untangle_global.h"
+
 #include "nodes/algorithms/hex_corners.h"
+#include "nodes/algorithms/hex_quality.h"
 #include "nodes/artefacts/cell_rings.h"
 #include "nodes/artefacts/hex_topology.h"
+#include "runtime/cancel.h"
+#include "runtime/lbfgs.h"
 
 #include <tbb/parallel_for.h>
 
@@ -12,10 +16,6 @@
 #include <cmath>
 #include <limits>
 #include <vector>
-
-#include "nodes/algorithms/hex_quality.h"
-#include "runtime/cancel.h"
-#include "runtime/lbfgs.h"
 
 namespace polyhex {
 namespace {
@@ -29,9 +29,8 @@ using VecX = Eigen::VectorXd;
 /// four parallel edges: X1 = (p1-p0)+(p2-p3)+(p5-p4)+(p6-p7), X2 = (p3-p0)+(p2-p1)+(p7-p4)+(p6-p5),
 /// X3 = (p4-p0)+(p5-p1)+(p6-p2)+(p7-p3), each over 4. (Linear in P: J_t = P^T W_t with a sparse W_t,
 /// applied here without forming it.)
-constexpr int kCentreAxis[3][4][2] = {{{1, 0}, {2, 3}, {5, 4}, {6, 7}},
-                                      {{3, 0}, {2, 1}, {7, 4}, {6, 5}},
-                                      {{4, 0}, {5, 1}, {6, 2}, {7, 3}}};
+constexpr int kCentreAxis[3][4][2] = {
+    {{1, 0}, {2, 3}, {5, 4}, {6, 7}}, {{3, 0}, {2, 1}, {7, 4}, {6, 5}}, {{4, 0}, {5, 1}, {6, 2}, {7, 3}}};
 Eigen::Matrix3d jacobian(const Mat83& P, size_t t) {
   using optimize_detail::kCorners;
   Eigen::Matrix3d J;
@@ -62,7 +61,6 @@ void scatter(Mat83& G, size_t t, const Eigen::Matrix3d& dJ) {
       }
   }
 }
-
 
 using optimize_detail::winslow_term;
 
@@ -119,7 +117,14 @@ class GlobalUntangler {
   GlobalUntangler(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,
                   const std::vector<char>& fixed, const TriangleTree& tree, const std::vector<Vec3>& normals,
                   const GlobalUntangleParams& p, GlobalUntangleStats& st)
-      : V_(V), H_(H), on_surface_(on_surface), fixed_(fixed), tree_(tree), normals_(normals), p_(p), st_(st),
+      : V_(V),
+        H_(H),
+        on_surface_(on_surface),
+        fixed_(fixed),
+        tree_(tree),
+        normals_(normals),
+        p_(p),
+        st_(st),
         t0_(std::chrono::steady_clock::now()) {}
 
   /// Average scaled Jacobian ascent around the seed hexes (see raise_average()); returns false (nothing
@@ -225,7 +230,8 @@ class GlobalUntangler {
 
   /// Free vertices: those of the inverted hexes grown by p_.rings rings; active hexes: those with a free vertex.
   void select(const std::vector<char>& inv, Eigen::Index nv, Eigen::Index nh) {
-    const std::vector<char> region = cell_ring_region(H_, nv, p_.rings, [&](Eigen::Index h) { return inv[size_t(h)] != 0; });
+    const std::vector<char> region =
+        cell_ring_region(H_, nv, p_.rings, [&](Eigen::Index h) { return inv[size_t(h)] != 0; });
     dof_.assign(size_t(nv), -1);
     ndof_ = 0;
     for (Eigen::Index v = 0; v < nv; ++v)
@@ -274,8 +280,8 @@ class GlobalUntangler {
   void apply(const VecX& x) {
     for (size_t i = 0; i < free_.size(); ++i) {
       const int v = free_[i], d = dof_[size_t(v)];
-      const Vec3 pos = on_surface_[size_t(v)] ? Vec3(base_[i] + frame_[i] * x.segment<2>(d))
-                                              : Vec3(base_[i] + x.segment<3>(d));
+      const Vec3 pos =
+          on_surface_[size_t(v)] ? Vec3(base_[i] + frame_[i] * x.segment<2>(d)) : Vec3(base_[i] + x.segment<3>(d));
       V_.row(v) = pos.transpose();
     }
   }
@@ -388,7 +394,8 @@ class GlobalUntangler {
       }
       return stop_when_untangled && done % 5 == 0 && untangled_at(y);
     };
-    return lbfgs_minimize(x, [&](const VecX& y, VecX* g) { return energy(y, eps, g); }, o, stop, &st_.lbfgs_iterations) ==
+    return lbfgs_minimize(
+               x, [&](const VecX& y, VecX* g) { return energy(y, eps, g); }, o, stop, &st_.lbfgs_iterations) ==
                LbfgsEnd::Stopped &&
            !st_.time_budget_hit;
   }
@@ -403,10 +410,10 @@ class GlobalUntangler {
   GlobalUntangleStats& st_;
   std::chrono::steady_clock::time_point t0_;
 
-  std::vector<int> dof_;       ///< #V first unknown of a free vertex, -1 otherwise
+  std::vector<int> dof_;  ///< #V first unknown of a free vertex, -1 otherwise
   Eigen::Index ndof_ = 0;
-  std::vector<int> free_;      ///< free vertices
-  std::vector<int> active_;    ///< hexes with a free vertex
+  std::vector<int> free_;    ///< free vertices
+  std::vector<int> active_;  ///< hexes with a free vertex
   std::vector<int> active_index_;
   std::vector<double> scale_;  ///< per active hex: initial mean edge length
   CellIncidence inc_;          ///< per free vertex: (active hex, corner) pairs
@@ -431,8 +438,9 @@ double hex_untangle_energy(const std::array<Eigen::Vector3d, 8>& p, double scale
 }
 
 long untangle_global(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,
-                     const std::vector<char>& fixed, const TriangleTree& tree, const std::vector<Eigen::Vector3d>& normals,
-                     const GlobalUntangleParams& p, GlobalUntangleStats* stats) {
+                     const std::vector<char>& fixed, const TriangleTree& tree,
+                     const std::vector<Eigen::Vector3d>& normals, const GlobalUntangleParams& p,
+                     GlobalUntangleStats* stats) {
   GlobalUntangleStats st;
   GlobalUntangler u(V, H, on_surface, fixed, tree, normals, p, st);
   const long left = u.run();
@@ -441,9 +449,9 @@ long untangle_global(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<c
 }
 
 bool raise_average(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,
-                   const std::vector<char>& fixed, const TriangleTree& tree, const std::vector<Eigen::Vector3d>& normals,
-                   const std::vector<char>& seeds, const AverageAscentParams& a, const GlobalUntangleParams& p,
-                   GlobalUntangleStats* stats) {
+                   const std::vector<char>& fixed, const TriangleTree& tree,
+                   const std::vector<Eigen::Vector3d>& normals, const std::vector<char>& seeds,
+                   const AverageAscentParams& a, const GlobalUntangleParams& p, GlobalUntangleStats* stats) {
   GlobalUntangleStats st;
   GlobalUntangler u(V, H, on_surface, fixed, tree, normals, p, st);
   const bool ran = u.run_average(seeds, a);
@@ -458,8 +466,9 @@ double hex_soft_scaled_jacobian(const std::array<Eigen::Vector3d, 8>& p, Eigen::
 }
 
 void smooth_region(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,
-                   const std::vector<char>& fixed, const TriangleTree& tree, const std::vector<Eigen::Vector3d>& normals,
-                   const std::vector<char>& seeds, const GlobalUntangleParams& p, GlobalUntangleStats* stats) {
+                   const std::vector<char>& fixed, const TriangleTree& tree,
+                   const std::vector<Eigen::Vector3d>& normals, const std::vector<char>& seeds,
+                   const GlobalUntangleParams& p, GlobalUntangleStats* stats) {
   GlobalUntangleStats st;
   GlobalUntangler u(V, H, on_surface, fixed, tree, normals, p, st);
   u.run_smooth(seeds);

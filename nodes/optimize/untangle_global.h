@@ -20,11 +20,11 @@
 /// Deterministic: per-hex terms are computed in parallel into arrays and summed in a fixed order.
 #pragma once
 
+#include "nodes/algorithms/triangle_tree.h"
+#include "nodes/artefacts/meshes.h"
+
 #include <array>
 #include <vector>
-
-#include "nodes/artefacts/meshes.h"
-#include "nodes/algorithms/triangle_tree.h"
 
 namespace polyhex {
 
@@ -32,16 +32,17 @@ struct GlobalUntangleParams {
   int outer_iterations = 40;   ///< ε updates (each followed by one L-BFGS run), [0, 1000]
   int lbfgs_iterations = 200;  ///< iterations of one L-BFGS run, [1, 100000]
   int rings = 3;               ///< free vertices: the inverted hexes' vertices grown by this many hex rings, [0, 50]
-  int polish_iterations = 100; ///< once untangled: L-BFGS iterations at ε -> 0 (a barrier: no hex inverts), [0, 100000]
-  double seconds = 0;          ///< wall-time budget, checked per L-BFGS iteration (the mesh so far is kept); 0 = none
+  int polish_iterations =
+      100;             ///< once untangled: L-BFGS iterations at ε -> 0 (a barrier: no hex inverts), [0, 100000]
+  double seconds = 0;  ///< wall-time budget, checked per L-BFGS iteration (the mesh so far is kept); 0 = none
 };
 
 struct GlobalUntangleStats {
-  int outer = 0;               ///< ε updates done
-  long lbfgs_iterations = 0;   ///< L-BFGS iterations, all runs
+  int outer = 0;              ///< ε updates done
+  long lbfgs_iterations = 0;  ///< L-BFGS iterations, all runs
   long free_vertices = 0;
   long inverted_before = 0, inverted_after = 0;  ///< hexes with a corner scaled Jacobian <= 0
-  bool time_budget_hit = false;  ///< stopped at p.seconds
+  bool time_budget_hit = false;                  ///< stopped at p.seconds
 };
 
 /// Untangles the hexes of H around its inverted ones by global L-BFGS descent (see the file comment).
@@ -54,8 +55,9 @@ struct GlobalUntangleStats {
 /// \return the number of inverted hexes left
 /// \pre on_surface.size() == fixed.size() == V.rows(); normals.size() == tree.triangles()
 long untangle_global(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,
-                     const std::vector<char>& fixed, const TriangleTree& tree, const std::vector<Eigen::Vector3d>& normals,
-                     const GlobalUntangleParams& p = {}, GlobalUntangleStats* stats = nullptr);
+                     const std::vector<char>& fixed, const TriangleTree& tree,
+                     const std::vector<Eigen::Vector3d>& normals, const GlobalUntangleParams& p = {},
+                     GlobalUntangleStats* stats = nullptr);
 
 /// Smooths the hexes around `seeds` (#H flags): the seeds' vertices grown by p.rings rings move together by
 /// L-BFGS on the same energy at ε -> 0, where it is a barrier against inversion (p.polish_iterations
@@ -63,14 +65,16 @@ long untangle_global(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<c
 /// inverts a hex. Nothing happens when a hex of the region is inverted.
 /// \pre as untangle_global(); seeds.size() == H.rows()
 void smooth_region(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,
-                   const std::vector<char>& fixed, const TriangleTree& tree, const std::vector<Eigen::Vector3d>& normals,
-                   const std::vector<char>& seeds, const GlobalUntangleParams& p, GlobalUntangleStats* stats = nullptr);
+                   const std::vector<char>& fixed, const TriangleTree& tree,
+                   const std::vector<Eigen::Vector3d>& normals, const std::vector<char>& seeds,
+                   const GlobalUntangleParams& p, GlobalUntangleStats* stats = nullptr);
 
 /// The ascent's own settings (raise_average).
 struct AverageAscentParams {
-  double barrier = 0.01;   ///< weight of the Winslow barrier, >= 0
-  double tolerance = 0;    ///< stop when 25 iterations raise the scaled Jacobian by less than this per hex of the region, >= 0
-  double work = 1e12;      ///< iterations are also capped at work / the hexes of the region, > 0
+  double barrier = 0.01;  ///< weight of the Winslow barrier, >= 0
+  double tolerance =
+      0;  ///< stop when 25 iterations raise the scaled Jacobian by less than this per hex of the region, >= 0
+  double work = 1e12;  ///< iterations are also capped at work / the hexes of the region, > 0
 };
 
 /// Raises the average scaled Jacobian around `seeds` (#H flags): the seeds' vertices grown by p.rings rings
@@ -85,9 +89,9 @@ struct AverageAscentParams {
 /// \return false (V unchanged) when the region is empty, has an inverted hex or the work cap allows no iteration
 /// \pre as untangle_global(); seeds.size() == H.rows(); a's fields in their ranges
 bool raise_average(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,
-                   const std::vector<char>& fixed, const TriangleTree& tree, const std::vector<Eigen::Vector3d>& normals,
-                   const std::vector<char>& seeds, const AverageAscentParams& a, const GlobalUntangleParams& p,
-                   GlobalUntangleStats* stats = nullptr);
+                   const std::vector<char>& fixed, const TriangleTree& tree,
+                   const std::vector<Eigen::Vector3d>& normals, const std::vector<char>& seeds,
+                   const AverageAscentParams& a, const GlobalUntangleParams& p, GlobalUntangleStats* stats = nullptr);
 
 /// Soft minimum of the 9 scaled Jacobians (8 corners, centre) of one hex, s_min - log(Σ exp(-40 (s_t - s_min))) / 40,
 /// within log(9) / 40 below the hex's scaled Jacobian, and, if grad, its gradient (8 by 3, row k = corner k).

@@ -1,5 +1,8 @@
 #include "nodes/orient/orient.h"
 
+#include "nodes/algorithms/rotations.h"
+#include "runtime/errors.h"
+
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
@@ -8,9 +11,6 @@
 #include <set>
 #include <string>
 #include <vector>
-
-#include "nodes/algorithms/rotations.h"
-#include "runtime/errors.h"
 
 namespace polyhex {
 namespace {

@@ -19,20 +19,21 @@
 namespace polyhex {
 
 struct OrientParams {
-  int max_frames = 3;          ///< frames that run as branches at most, the input frame included, [1, 8]
-  double within = 0.25;        ///< besides the lowest-energy frame, frames with energy up to (1 + within) x its energy run too, [0, 10]
-  double distinct_degrees = 5; ///< candidates closer than this (up to the cube's symmetries) are one, (0, 45]
-  int histogram = 16;          ///< normals are binned on a cube map of 6 x histogram^2 cells, [2, 256]
-  int spread_starts = 24;      ///< descents also start from this many rotations spread over SO(3), [0, 1000]
+  int max_frames = 3;  ///< frames that run as branches at most, the input frame included, [1, 8]
+  double within =
+      0.25;  ///< besides the lowest-energy frame, frames with energy up to (1 + within) x its energy run too, [0, 10]
+  double distinct_degrees = 5;  ///< candidates closer than this (up to the cube's symmetries) are one, (0, 45]
+  int histogram = 16;           ///< normals are binned on a cube map of 6 x histogram^2 cells, [2, 256]
+  int spread_starts = 24;       ///< descents also start from this many rotations spread over SO(3), [0, 1000]
 };
 
 /// What the search saw, for the report.
 struct OrientStats {
-  int starts = 0;              ///< descents run
-  int bins = 0;                ///< non-empty normal bins
-  double input_energy = 0;     ///< E of the input frame
-  double best_energy = 0;      ///< lowest E found
-  int branches = 0;            ///< frames that run (the input frame included)
+  int starts = 0;           ///< descents run
+  int bins = 0;             ///< non-empty normal bins
+  double input_energy = 0;  ///< E of the input frame
+  double best_energy = 0;   ///< lowest E found
+  int branches = 0;         ///< frames that run (the input frame included)
 };
 
 /// Axis-alignment energy E(R) of a surface's triangle normals (area-weighted; see the file comment).

@@ -2,12 +2,13 @@
 /// @brief Bindings of `orient/search` (candidate frames scored by axis alignment, nodes/orient/orient.h)
 /// and `orient/input` (the input frame alone), and of the frame nodes that carry meshes into a
 /// candidate's frame and back: `frame_tets`, `frame_surface`, `unframe_hexes`.
+#include "nodes/orient/orient.h"
+
+#include "graph/node.h"
+
 #include <Eigen/Geometry>
 
 #include <cmath>
-
-#include "graph/node.h"
-#include "nodes/orient/orient.h"
 
 namespace polyhex {
 namespace {
@@ -16,11 +17,13 @@ json frames_json(const Frames& f) {
   json all = json::array();
   for (const FrameCandidate& c : f.candidates) {
     const Eigen::AngleAxisd aa(c.R);
-    all.push_back({{"source", c.source},
-                   {"energy", c.energy},
-                   {"branch", c.branch},
-                   {"turn_degrees", aa.angle() * 180 / M_PI},
-                   {"rotation", {{c.R(0, 0), c.R(0, 1), c.R(0, 2)}, {c.R(1, 0), c.R(1, 1), c.R(1, 2)}, {c.R(2, 0), c.R(2, 1), c.R(2, 2)}}}});
+    all.push_back(
+        {{"source", c.source},
+         {"energy", c.energy},
+         {"branch", c.branch},
+         {"turn_degrees", aa.angle() * 180 / M_PI},
+         {"rotation",
+          {{c.R(0, 0), c.R(0, 1), c.R(0, 2)}, {c.R(1, 0), c.R(1, 1), c.R(1, 2)}, {c.R(2, 0), c.R(2, 1), c.R(2, 2)}}}});
   }
   return all;
 }
@@ -67,10 +70,11 @@ struct FrameParams {
 };
 
 ParamSet<FrameParams> frame_params() {
-  return ParamSet<FrameParams>().add("branch", &FrameParams::branch,
-                                     "the branch whose frame is used (configs: \"${branch}\"); none: nothing is produced "
-                                     "and the branch is skipped",
-                                     1, 8);
+  return ParamSet<FrameParams>().add(
+      "branch", &FrameParams::branch,
+      "the branch whose frame is used (configs: \"${branch}\"); none: nothing is produced "
+      "and the branch is skipped",
+      1, 8);
 }
 
 /// V with every row x replaced by R x.
@@ -99,25 +103,29 @@ const bool registered_frame_tets = register_node(
         .with_may_skip()
         .with_frame_role(NodeSpec::FrameRole::enters));
 
-const bool registered_frame_surface = register_node(
-    make_node<FrameParams>("frame_surface", "the surface turned into the frame of one branch's candidate (x -> R x)",
-                           frame_params(),
-                           {{"surface", artefact_name<SurfaceMesh>()}, {"frames", artefact_name<Frames>()}},
-                           artefact_name<SurfaceMesh>(), into_frame<SurfaceMesh>)
-        .with_may_skip()
-        .with_frame_role(NodeSpec::FrameRole::enters));
+const bool registered_frame_surface =
+    register_node(make_node<FrameParams>(
+                      "frame_surface", "the surface turned into the frame of one branch's candidate (x -> R x)",
+                      frame_params(), {{"surface", artefact_name<SurfaceMesh>()}, {"frames", artefact_name<Frames>()}},
+                      artefact_name<SurfaceMesh>(), into_frame<SurfaceMesh>)
+                      .with_may_skip()
+                      .with_frame_role(NodeSpec::FrameRole::enters));
 
-const bool registered_unframe = register_node(make_node<FrameParams>(
-    "unframe_hexes", "a hex mesh built in one branch's frame turned back into the input's frame (x -> Rᵀ x)",
-    frame_params(), {{"hexes", artefact_name<HexMesh>()}, {"frames", artefact_name<Frames>()}},
-    artefact_name<HexMesh>(), [](const FrameParams& p, const Inputs& in, NodeContext& ctx) {
-      const FrameCandidate* c = in.get<Frames>(1)->of_branch(p.branch);
-      if (!c) throw InvalidInput("no candidate frame runs as branch " + std::to_string(p.branch));
-      if (c->R == Eigen::Matrix3d::Identity()) return in.items[0];
-      HexMesh m = *in.get<HexMesh>(0);
-      m.V = rotate_rows(m.V, c->R.transpose());
-      return make_artefact(std::move(m));
-    }).with_frame_role(NodeSpec::FrameRole::leaves));
+const bool registered_unframe = register_node(
+    make_node<FrameParams>("unframe_hexes",
+                           "a hex mesh built in one branch's frame turned back into the input's frame (x -> Rᵀ x)",
+                           frame_params(), {{"hexes", artefact_name<HexMesh>()}, {"frames", artefact_name<Frames>()}},
+                           artefact_name<HexMesh>(),
+                           [](const FrameParams& p, const Inputs& in, NodeContext& ctx) {
+                             const FrameCandidate* c = in.get<Frames>(1)->of_branch(p.branch);
+                             if (!c)
+                               throw InvalidInput("no candidate frame runs as branch " + std::to_string(p.branch));
+                             if (c->R == Eigen::Matrix3d::Identity()) return in.items[0];
+                             HexMesh m = *in.get<HexMesh>(0);
+                             m.V = rotate_rows(m.V, c->R.transpose());
+                             return make_artefact(std::move(m));
+                           })
+        .with_frame_role(NodeSpec::FrameRole::leaves));
 
 }  // namespace
 }  // namespace polyhex

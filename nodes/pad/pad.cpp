@@ -1,6 +1,11 @@
 // Padding layer (paper §6 inset). See pad.h.
 #include "nodes/pad/pad.h"
 
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/algorithms/triangle_tree.h"
+#include "runtime/cancel.h"
+#include "runtime/errors.h"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -9,11 +14,6 @@
 #include <map>
 #include <string>
 #include <vector>
-
-#include "nodes/algorithms/hex_quality.h"
-#include "nodes/algorithms/triangle_tree.h"
-#include "runtime/cancel.h"
-#include "runtime/errors.h"
 
 namespace polyhex {
 namespace {
@@ -57,7 +57,7 @@ HexMesh without_hexes(const HexMesh& m, const std::vector<char>& drop) {
 struct BoundaryFaces {
   std::vector<std::array<int, 4>> quad;
   std::vector<int> hex;
-  std::vector<int> faces_of_hex;          ///< boundary faces per hex
+  std::vector<int> faces_of_hex;           ///< boundary faces per hex
   std::vector<std::vector<int>> faces_at;  ///< boundary faces per vertex
 };
 
@@ -309,7 +309,8 @@ HexMesh pad_boundary(const HexMesh& input, const SurfaceMesh* surface, const Pad
     st.nonmanifold_left = long(left.edges.size() + left.vertices.size());
   }
   const auto Q = hex_boundary_quads(mesh);
-  if (Q.rows() == 0) throw InvalidInput((mesh.source.empty() ? std::string("hex mesh") : mesh.source) + ": no boundary quads to pad");
+  if (Q.rows() == 0)
+    throw InvalidInput((mesh.source.empty() ? std::string("hex mesh") : mesh.source) + ": no boundary quads to pad");
   const Eigen::Index nv = mesh.V.rows(), nh = mesh.H.rows();
 
   std::vector<int> inner(size_t(nv), -1);
@@ -349,7 +350,8 @@ HexMesh pad_boundary(const HexMesh& input, const SurfaceMesh* surface, const Pad
     offset[b] = len > 0 ? Vec3(-normal[b] / len * p.thickness * edge[b] / std::max(edges[b], 1)) : Vec3::Zero();
   }
   for (Eigen::Index v = 0; v < nv; ++v)
-    if (inner[size_t(v)] >= 0) out.V.row(inner[size_t(v)]) = out.V.row(v) + offset[size_t(inner[size_t(v)] - nv)].transpose();
+    if (inner[size_t(v)] >= 0)
+      out.V.row(inner[size_t(v)]) = out.V.row(v) + offset[size_t(inner[size_t(v)] - nv)].transpose();
 
   // hexes: the old ones on the inner copies, then one per boundary quad (inner quad at the bottom)
   out.H.resize(nh + Q.rows(), 8);
@@ -366,7 +368,8 @@ HexMesh pad_boundary(const HexMesh& input, const SurfaceMesh* surface, const Pad
 
   // limit the offsets so that no hex that was valid, and no layer hex, inverts
   std::vector<char> was_inverted(size_t(out.H.rows()), 0);
-  for (Eigen::Index h = 0; h < nh; ++h) was_inverted[size_t(h)] = hex_scaled_jacobian(hex_points(mesh.V, mesh.H, h)).corner_min <= 0;
+  for (Eigen::Index h = 0; h < nh; ++h)
+    was_inverted[size_t(h)] = hex_scaled_jacobian(hex_points(mesh.V, mesh.H, h)).corner_min <= 0;
   std::vector<double> scale(static_cast<size_t>(nb), 1.0);
   for (int round = 0; round <= p.max_halvings; ++round) {
     std::vector<char> shrink(static_cast<size_t>(nb), 0);

@@ -3,22 +3,23 @@
 /// which gives the optimization the freedom the hexes at PolyCube edges and corners lack on smooth parts.
 #pragma once
 
+#include "nodes/artefacts/meshes.h"
+
 #include <array>
 #include <vector>
-
-#include "nodes/artefacts/meshes.h"
 
 namespace polyhex {
 
 /// The params of pad_boundary. Their ranges are declared once, in the binding (pad_node.cpp), which checks
 /// them and lists them in `polyhex nodes`.
 struct PadParams {
-  double thickness = 0.4;   ///< inward offset of the inner copies, fraction of the local hex edge
-  int max_halvings = 10;    ///< halve a vertex's offset at most this often while a hex it touches is inverted
+  double thickness = 0.4;       ///< inward offset of the inner copies, fraction of the local hex edge
+  int max_halvings = 10;        ///< halve a vertex's offset at most this often while a hex it touches is inverted
   bool remove_doublets = true;  ///< first remove hexes at boundary doublets (see remove_boundary_doublets)
-  int peel_rounds = 0;      ///< first remove boundary hexes with corner scaled Jacobian <= peel_sj, this many times
-  double peel_sj = 0.0;     ///< see peel_rounds
-  bool repair_nonmanifold = true;  ///< first remove hexes at non-manifold boundary edges and vertices (remove_nonmanifold_boundary)
+  int peel_rounds = 0;          ///< first remove boundary hexes with corner scaled Jacobian <= peel_sj, this many times
+  double peel_sj = 0.0;         ///< see peel_rounds
+  bool repair_nonmanifold =
+      true;  ///< first remove hexes at non-manifold boundary edges and vertices (remove_nonmanifold_boundary)
 };
 
 struct PadStats {
@@ -30,15 +31,16 @@ struct PadStats {
   long hexes_removed = 0;   ///< hexes removed to resolve them
   long peeled = 0;          ///< poor boundary hexes removed (peel_rounds)
   long nonmanifold_edges = 0, nonmanifold_vertices = 0;  ///< found in the input (repair_nonmanifold)
-  long nonmanifold_removed = 0;  ///< hexes removed to make the boundary manifold
-  long nonmanifold_left = 0;     ///< non-manifold boundary edges + vertices of the result (0 unless the repair gave up)
+  long nonmanifold_removed = 0;                          ///< hexes removed to make the boundary manifold
+  long nonmanifold_left = 0;  ///< non-manifold boundary edges + vertices of the result (0 unless the repair gave up)
   double seconds = 0;
 };
 
 /// The non-manifold places of a hex mesh's boundary (faces in one hex only).
 struct BoundaryDefects {
   std::vector<std::array<int, 2>> edges;  ///< boundary edges not in exactly two boundary faces (sorted pairs)
-  std::vector<int> vertices;  ///< boundary vertices whose boundary faces form more than one fan across their manifold edges
+  std::vector<int>
+      vertices;  ///< boundary vertices whose boundary faces form more than one fan across their manifold edges
 };
 
 /// Finds the non-manifold boundary edges and vertices: where two sheets of hexes touch along an edge only
@@ -49,23 +51,23 @@ BoundaryDefects find_boundary_defects(const HexMesh& mesh);
 
 /// remove_nonmanifold_boundary's result.
 struct NonmanifoldRepair {
-  HexMesh mesh;        ///< the mesh without the removed hexes (a copy of the input if it has no defect)
-  long edges = 0;      ///< non-manifold boundary edges found in the input
-  long vertices = 0;   ///< non-manifold boundary vertices found in the input
-  long removed = 0;    ///< hexes removed
+  HexMesh mesh;       ///< the mesh without the removed hexes (a copy of the input if it has no defect)
+  long edges = 0;     ///< non-manifold boundary edges found in the input
+  long vertices = 0;  ///< non-manifold boundary vertices found in the input
+  long removed = 0;   ///< hexes removed
 };
 
 /// peel_boundary_hexes's result.
 struct Peeled {
-  HexMesh mesh;        ///< the mesh without the peeled hexes (never empty)
-  long removed = 0;    ///< hexes removed
+  HexMesh mesh;      ///< the mesh without the peeled hexes (never empty)
+  long removed = 0;  ///< hexes removed
 };
 
 /// remove_boundary_doublets's result.
 struct DoubletRepair {
-  HexMesh mesh;        ///< the mesh without the removed hexes (a copy of the input if it has no doublet)
-  long doublets = 0;   ///< boundary doublet vertices found in the input
-  long removed = 0;    ///< hexes removed
+  HexMesh mesh;       ///< the mesh without the removed hexes (a copy of the input if it has no doublet)
+  long doublets = 0;  ///< boundary doublet vertices found in the input
+  long removed = 0;   ///< hexes removed
 };
 
 /// Removes hexes until the boundary is manifold: per non-manifold edge or vertex, the hex with a boundary
@@ -107,6 +109,7 @@ DoubletRepair remove_boundary_doublets(const HexMesh& mesh);
 /// (remove_boundary_doublets).
 /// \return the padded mesh: V = [kept input vertices, inner copies], hexes = [kept input hexes, layer]
 /// \throw InvalidInput when the mesh fails check_hex_mesh or has no boundary
-HexMesh pad_boundary(const HexMesh& mesh, const SurfaceMesh* surface, const PadParams& p = {}, PadStats* stats = nullptr);
+HexMesh pad_boundary(const HexMesh& mesh, const SurfaceMesh* surface, const PadParams& p = {},
+                     PadStats* stats = nullptr);
 
 }  // namespace polyhex

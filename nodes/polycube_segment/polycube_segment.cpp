@@ -1,25 +1,24 @@
 #include "nodes/polycube_segment/polycube_segment.h"
 
 #include "nodes/algorithms/chart_order.h"
+#include "nodes/algorithms/reference_length.h"
+#include "runtime/cancel.h"
+#include "runtime/errors.h"
 
 #include <Eigen/Geometry>
 
 #include <algorithm>
-#include <memory>
 #include <array>
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <map>
+#include <memory>
 #include <numeric>
 #include <queue>
 #include <set>
 #include <sstream>
 #include <tuple>
-
-#include "nodes/algorithms/reference_length.h"
-#include "runtime/cancel.h"
-#include "runtime/errors.h"
 
 namespace polyhex {
 namespace {
@@ -37,13 +36,13 @@ struct Surface {
   const RowMatrixX3d* V = nullptr;
   const RowMatrixX3i* F = nullptr;
   std::vector<MeshEdge> edges;
-  std::vector<std::array<int, 3>> tri_nbrs;                // triangle across each edge
-  std::vector<std::vector<int>> vert_tris;                 // triangles around each vertex
+  std::vector<std::array<int, 3>> tri_nbrs;                  // triangle across each edge
+  std::vector<std::vector<int>> vert_tris;                   // triangles around each vertex
   std::vector<std::vector<std::pair<int, int>>> vert_edges;  // (other vertex, edge id)
-  std::vector<Vec3> normal;                                // unit triangle normals
+  std::vector<Vec3> normal;                                  // unit triangle normals
   std::vector<double> area;
   double total_area = 0;
-  double diag = 0;      // reference length of the used vertices (nodes/algorithms/reference_length.h)
+  double diag = 0;  // reference length of the used vertices (nodes/algorithms/reference_length.h)
   double mean_edge = 0;
 
   int nf() const { return int(F->rows()); }
@@ -66,8 +65,8 @@ Surface build_surface(const RowMatrixX3d& V, const RowMatrixX3i& F) {
     for (int k = 0; k < 3; ++k) {
       int a = F(t, k), b = F(t, (k + 1) % 3);
       if (a < 0 || a >= nv || b < 0 || b >= nv)
-        throw InvalidInput("triangle " + std::to_string(t) + " has a vertex index out of range (" +
-                           std::to_string(nv) + " vertices)");
+        throw InvalidInput("triangle " + std::to_string(t) + " has a vertex index out of range (" + std::to_string(nv) +
+                           " vertices)");
       half.push_back({std::min(a, b), std::max(a, b), t, k});
     }
   std::sort(half.begin(), half.end(), [](const Half& x, const Half& y) {
@@ -212,13 +211,13 @@ void flood_fill(const Surface& s, const std::vector<Vec3>& normal, std::vector<i
 // PolyCube edges and corners
 
 struct Structure {
-  int n = 0;                              // charts
-  std::vector<int> chart;                 // #F
-  std::vector<std::vector<int>> adj;      // chart graph
+  int n = 0;                          // charts
+  std::vector<int> chart;             // #F
+  std::vector<std::vector<int>> adj;  // chart graph
   std::vector<PolyCubeEdge> edges;
   std::vector<PolyCubeCorner> corners;
-  std::vector<int> degree;                // #V chart-boundary mesh edges per vertex
-  std::vector<int> label;                 // #charts direction label of each chart
+  std::vector<int> degree;  // #V chart-boundary mesh edges per vertex
+  std::vector<int> label;   // #charts direction label of each chart
 };
 
 Structure analyse(const Surface& s, const std::vector<int>& label) {
@@ -325,9 +324,9 @@ int separating_label(const std::vector<int>& nbr_labels, const Vec3& normal, boo
   int count[3] = {0, 0, 0};
   for (int l : nbr_labels) ++count[label_axis(l)];
   int distinct = (count[0] > 0) + (count[1] > 0) + (count[2] > 0);
-  bool use_remaining = two_pairs ? (distinct == 2 && nbr_labels.size() == 4 &&
-                                    std::max({count[0], count[1], count[2]}) == 2)
-                                 : distinct == 2;
+  bool use_remaining = two_pairs
+                           ? (distinct == 2 && nbr_labels.size() == 4 && std::max({count[0], count[1], count[2]}) == 2)
+                           : distinct == 2;
   if (use_remaining) {
     int r = count[0] == 0 ? 0 : count[1] == 0 ? 1 : 2;
     return 2 * r + (normal[r] >= 0 ? 0 : 1);
@@ -360,16 +359,15 @@ int chart_at(const Surface& s, const std::vector<int>& chart, int v, const std::
 }
 
 struct State {
-  std::vector<int> label;      // #F
-  std::vector<char> band;      // #F: inserted by a split
-  int splits_multi = 0, splits_wedge = 0, splits_ramp = 0, splits_cycle = 0, splits_island = 0, repaired_corners = 0, removed_small = 0,
-      removed_narrow = 0;
+  std::vector<int> label;  // #F
+  std::vector<char> band;  // #F: inserted by a split
+  int splits_multi = 0, splits_wedge = 0, splits_ramp = 0, splits_cycle = 0, splits_island = 0, repaired_corners = 0,
+      removed_small = 0, removed_narrow = 0;
 };
 
 /// §5.1 multi-orientation charts: a chart touching a chart of the opposite direction along a
 /// curve is split there by a separating chart of width h (the hex edge length).
-void split_multi_orientation(const Surface& s, const std::vector<Vec3>& normal, double h, int max_splits,
-                             State& st) {
+void split_multi_orientation(const Surface& s, const std::vector<Vec3>& normal, double h, int max_splits, State& st) {
   std::set<std::vector<int>> tried;
   while (st.splits_multi < max_splits) {
     throw_if_interrupted();
@@ -436,11 +434,11 @@ void split_multi_orientation(const Surface& s, const std::vector<Vec3>& normal, 
 // Highly non-planar charts (§5.1)
 
 struct Extremum {
-  int tip = -1;           // vertex at the wedge tip
+  int tip = -1;  // vertex at the wedge tip
   int chart_a = -1, chart_b = -1;
-  double severity = 0;    // area of the triangle with the neighbouring extrema / endpoints
-  double width = 0;       // 2D distance of the wedge endpoints in the plane of the two chart axes
-  int cut_chart = -1;     // the chart to cut when known (a ramp), else the concave one of chart_a, chart_b
+  double severity = 0;  // area of the triangle with the neighbouring extrema / endpoints
+  double width = 0;     // 2D distance of the wedge endpoints in the plane of the two chart axes
+  int cut_chart = -1;   // the chart to cut when known (a ramp), else the concave one of chart_a, chart_b
 };
 
 /// A smoothed copy of a PolyCube edge's vertex positions (`smoothing` passes of 3-point averaging,
@@ -459,8 +457,8 @@ std::vector<Vec3> smoothed_edge(const Surface& s, const PolyCubeEdge& e, int smo
 
 /// Extrema of the smoothed chart edges: points where an edge doubles back along the direction it
 /// should run in (the axis neither chart maps to), found with a hysteresis of `depth`.
-std::vector<Extremum> find_extrema(const Surface& s, const Structure& S, const std::vector<int>& label,
-                                   int smoothing, double depth) {
+std::vector<Extremum> find_extrema(const Surface& s, const Structure& S, const std::vector<int>& label, int smoothing,
+                                   double depth) {
   std::vector<int> chart_label(S.n);
   for (int t = 0; t < s.nf(); ++t) chart_label[S.chart[t]] = label[t];
   std::vector<Extremum> out;
@@ -641,7 +639,8 @@ void cut_repeatedly(const Surface& s, const std::vector<Vec3>& normal, const Pol
     for (auto& x : all)
       if (eligible(x) && !failed_tips.count(x.tip)) todo.push_back(x);
     // stable: equal severities keep the order of the search (a ramp's crossings, edge by edge)
-    std::stable_sort(todo.begin(), todo.end(), [](const Extremum& u, const Extremum& v) { return u.severity > v.severity; });
+    std::stable_sort(todo.begin(), todo.end(),
+                     [](const Extremum& u, const Extremum& v) { return u.severity > v.severity; });
     bool applied = false;
     for (auto& x : todo) {
       if (cut_wedge(s, normal, S, x, all, p, st)) {
@@ -659,7 +658,9 @@ void split_wedges(const Surface& s, const std::vector<Vec3>& normal, const PolyC
   const double h = p.hex_edge_length * s.diag, min_severity = p.wedge_min_severity * s.diag * s.diag;
   cut_repeatedly(
       s, normal, p, st, st.splits_wedge,
-      [&](const Structure& S) { return find_extrema(s, S, st.label, p.edge_smoothing_iterations, p.extremum_depth * h); },
+      [&](const Structure& S) {
+        return find_extrema(s, S, st.label, p.edge_smoothing_iterations, p.extremum_depth * h);
+      },
       [&](const Extremum& x) { return x.severity >= min_severity; });
 }
 
@@ -742,7 +743,8 @@ void split_ramps(const Surface& s, const std::vector<Vec3>& normal, const PolyCu
 /// the structure S; `cycle_charts`, when given, gets a flag per chart: on one of those cycles; `cuts`,
 /// when given, the cuts that open them (cycle_cuts: per group, each of its charts at the group's level).
 int order_cycles(const Surface& s, const Structure& S, const TetEdgeGraph& graph, double h,
-                 std::vector<char>* cycle_charts, std::vector<LevelCut>* cuts = nullptr, double* dropped_evidence = nullptr) {
+                 std::vector<char>* cycle_charts, std::vector<LevelCut>* cuts = nullptr,
+                 double* dropped_evidence = nullptr) {
   std::vector<std::vector<int>> vcharts(s.V->rows());
   for (int t = 0; t < s.nf(); ++t)
     for (int v : (*s.F).row(t)) {
@@ -1133,8 +1135,7 @@ void repair_corners(const Surface& s, const std::vector<Vec3>& normal, double h,
         std::vector<int> patch = grow_band(s, {v}, all, radius);
         Vec3 n = mean_normal(s, normal, patch);
         std::array<int, 6> order = {0, 1, 2, 3, 4, 5};
-        std::sort(order.begin(), order.end(),
-                  [&](int a, int b) { return label_dir(a).dot(n) > label_dir(b).dot(n); });
+        std::sort(order.begin(), order.end(), [&](int a, int b) { return label_dir(a).dot(n) > label_dir(b).dot(n); });
         for (int l : order) {
           State trial = st;
           for (int t : patch) trial.label[t] = l;
@@ -1159,8 +1160,8 @@ void repair_corners(const Surface& s, const std::vector<Vec3>& normal, double h,
 /// Removes the small charts (area below p.small_chart_area of the surface) that `bad` selects,
 /// relabelling them by flood fill; repeats until none is selected. `straighten_first` straightens
 /// before each round. Counts the removed charts in st.removed_small.
-void remove_small_charts(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p,
-                         State& st, bool straighten_first,
+void remove_small_charts(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p, State& st,
+                         bool straighten_first,
                          const std::function<bool(const Structure&, int chart, int edges)>& bad) {
   for (int round = 0; round < 16; ++round) {
     throw_if_interrupted();
@@ -1199,8 +1200,7 @@ void clean_up(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeS
 /// neighbours are removed by flood fill too.
 void remove_small_invalid(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p,
                           State& st) {
-  remove_small_charts(s, normal, p, st, false,
-                      [](const Structure& S, int c, int) { return S.adj[c].size() < 4; });
+  remove_small_charts(s, normal, p, st, false, [](const Structure& S, int c, int) { return S.adj[c].size() < 4; });
 }
 
 /// The extensions after the splits: island cuts, then corner patches (as the params select). If
@@ -1293,7 +1293,8 @@ NarrowCharts narrow_charts(const Surface& s, const State& st, double limit, doub
 /// repairs (island cuts, corner patches), kept only if valid with fewer narrow charts. Separating charts
 /// the splits inserted (width h by design) are left alone. Up to 4 rounds, as a removal can make a
 /// neighbour narrow.
-void remove_narrow_charts(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p, State& st) {
+void remove_narrow_charts(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p,
+                          State& st) {
   if (p.min_chart_extent <= 0 || p.narrow_chart_faces <= 0) return;
   if (!make_result(s, st).valid) return;  // every change below is kept only when valid
   const double h = p.hex_edge_length * s.diag, limit = p.min_chart_extent * h, max_area = p.narrow_chart_faces * h * h;
@@ -1345,7 +1346,8 @@ PolyCubeSegmentation segment_once(const Surface& s, const PolyCubeSegmentParams&
   repair(s, normal, p, st);
   remove_narrow_charts(s, normal, p, st);
   PolyCubeSegmentation r = make_result(s, st);
-  r.order_cycles = p.split_order_cycles ? order_cycles(s, analyse(s, st.label), *graph, p.hex_edge_length * s.diag, nullptr) : -1;
+  r.order_cycles =
+      p.split_order_cycles ? order_cycles(s, analyse(s, st.label), *graph, p.hex_edge_length * s.diag, nullptr) : -1;
   r.smoothing_iterations = smoothing;
   return r;
 }

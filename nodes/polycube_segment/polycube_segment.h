@@ -55,38 +55,46 @@
 ///   result kept when its score is better.
 #pragma once
 
-#include <filesystem>
-#include <utility>
-
 #include "nodes/artefacts/meshes.h"
 #include "nodes/artefacts/polycube.h"
+
+#include <filesystem>
+#include <utility>
 
 namespace polyhex {
 
 struct PolyCubeSegmentParams {
-  int smoothing_iterations = 3;        ///< passes of area-weighted normal averaging over edge neighbours before labelling
-  double hex_edge_length = 0.01;       ///< target hex edge, fraction of the reference length (nodes/algorithms/reference_length.h): width of multi-orientation separating charts (§5.1)
-  double small_chart_area = 0.005;     ///< a chart bounded by <= small_chart_edges edges is removed below this fraction of the surface area
-  int small_chart_edges = 2;           ///< charts bounded by at most this many PolyCube edges are removal candidates (§5.1: two)
-  bool split_multi_orientation = true; ///< split charts touching their opposite direction by a separating chart
-  bool split_wedges = true;            ///< cut highly non-planar charts at wedge tips
-  int edge_smoothing_iterations = 10;  ///< Laplacian passes on copies of the chart edges before the extremum search
-  double extremum_depth = 2.0;         ///< an edge doubles back only when it returns by this many hex edge lengths
-  double wedge_min_severity = 1e-3;    ///< wedges whose triangle area is below this fraction of the reference length^2 are left alone
-  int max_cut_candidates = 200;        ///< cut candidates tested per wedge, cheapest first
-  bool split_ramps = true;             ///< cut charts that climb far along their own axis (extension of §5.1, below)
-  double ramp_extent = 12.0;           ///< a chart is a ramp when its vertices span more than this many hex edges along its axis
-  bool split_order_cycles = true;      ///< cut charts whose same-axis order evidence forms a cycle (extension of §5.1, below)
-  int max_splits = 32;                 ///< upper bound on separating charts of each kind
-  bool final_cleanup = true;           ///< after the splits, remove small charts with < 4 neighbours by flood fill (extension of §5.1)
-  bool split_islands = true;           ///< cut a ring chart from the boundary of a chart with < 4 neighbours it encloses (extension of §5.1)
-  bool repair_corners = true;          ///< relabel a small patch at a 4-valent corner / opposite-direction touch point (extension of §5.1)
-  double min_chart_extent = 1.0;       ///< on a valid structure, remove charts narrower than this many hex edges ...
-  double narrow_chart_faces = 4.0;     ///< ... and smaller than this many hex faces (h²) where it stays valid (extension of §5.1,
-                                       ///< below); either 0 = off, [0, 100] each
-  int fallback_retries = 2;            ///< if invalid, retry with doubled smoothing this many times (reported as a warning)
-  bool allow_invalid = false;          ///< pass an invalid structure on with a warning instead of failing
-  bool save_surface = false;           ///< write <id>.charts.vtk (also written with --save-all)
+  int smoothing_iterations = 3;  ///< passes of area-weighted normal averaging over edge neighbours before labelling
+  double hex_edge_length =
+      0.01;  ///< target hex edge, fraction of the reference length (nodes/algorithms/reference_length.h): width of
+             ///< multi-orientation separating charts (§5.1)
+  double small_chart_area =
+      0.005;  ///< a chart bounded by <= small_chart_edges edges is removed below this fraction of the surface area
+  int small_chart_edges = 2;  ///< charts bounded by at most this many PolyCube edges are removal candidates (§5.1: two)
+  bool split_multi_orientation = true;  ///< split charts touching their opposite direction by a separating chart
+  bool split_wedges = true;             ///< cut highly non-planar charts at wedge tips
+  int edge_smoothing_iterations = 10;   ///< Laplacian passes on copies of the chart edges before the extremum search
+  double extremum_depth = 2.0;          ///< an edge doubles back only when it returns by this many hex edge lengths
+  double wedge_min_severity =
+      1e-3;  ///< wedges whose triangle area is below this fraction of the reference length^2 are left alone
+  int max_cut_candidates = 200;  ///< cut candidates tested per wedge, cheapest first
+  bool split_ramps = true;       ///< cut charts that climb far along their own axis (extension of §5.1, below)
+  double ramp_extent = 12.0;  ///< a chart is a ramp when its vertices span more than this many hex edges along its axis
+  bool split_order_cycles =
+      true;             ///< cut charts whose same-axis order evidence forms a cycle (extension of §5.1, below)
+  int max_splits = 32;  ///< upper bound on separating charts of each kind
+  bool final_cleanup =
+      true;  ///< after the splits, remove small charts with < 4 neighbours by flood fill (extension of §5.1)
+  bool split_islands =
+      true;  ///< cut a ring chart from the boundary of a chart with < 4 neighbours it encloses (extension of §5.1)
+  bool repair_corners =
+      true;  ///< relabel a small patch at a 4-valent corner / opposite-direction touch point (extension of §5.1)
+  double min_chart_extent = 1.0;    ///< on a valid structure, remove charts narrower than this many hex edges ...
+  double narrow_chart_faces = 4.0;  ///< ... and smaller than this many hex faces (h²) where it stays valid (extension
+                                    ///< of §5.1, below); either 0 = off, [0, 100] each
+  int fallback_retries = 2;    ///< if invalid, retry with doubled smoothing this many times (reported as a warning)
+  bool allow_invalid = false;  ///< pass an invalid structure on with a warning instead of failing
+  bool save_surface = false;   ///< write <id>.charts.vtk (also written with --save-all)
 };
 
 /// The boundary triangles of a tet mesh (faces used by exactly one tet), outward oriented.

@@ -1,7 +1,10 @@
 #include "nodes/position_deform/position_deform.h"
 
-#include "nodes/algorithms/reference_length.h"
 #include "nodes/algorithms/chart_order.h"
+#include "nodes/algorithms/reference_length.h"
+#include "runtime/cancel.h"
+#include "runtime/errors.h"
+#include "runtime/factorization.h"
 
 #include <Eigen/Dense>
 #include <Eigen/IterativeLinearSolvers>
@@ -14,10 +17,6 @@
 #include <cstdio>
 #include <limits>
 #include <map>
-
-#include "runtime/cancel.h"
-#include "runtime/errors.h"
-#include "runtime/factorization.h"
 
 namespace polyhex {
 
@@ -82,10 +81,10 @@ struct AxisInputs {
   const PolyCubeSegmentation& seg;
   const PositionDeformParams& p;
   const TetEdgeGraph& graph;
-  std::vector<std::vector<int>> vcharts;          ///< per vertex its charts (boundary vertices only have any)
-  std::vector<int> chart_label;                   ///< per chart its label
-  std::vector<std::vector<int>> chart_neighbours; ///< per chart its neighbours
-  std::vector<char> on_boundary;                  ///< per vertex: on the segmented surface
+  std::vector<std::vector<int>> vcharts;           ///< per vertex its charts (boundary vertices only have any)
+  std::vector<int> chart_label;                    ///< per chart its label
+  std::vector<std::vector<int>> chart_neighbours;  ///< per chart its neighbours
+  std::vector<char> on_boundary;                   ///< per vertex: on the segmented surface
   /// Mean value weights on the deformed mesh (final_solve "mvc_laplace"): surface (2D) weights of the
   /// boundary vertices, volume (3D) weights of the others.
   std::vector<std::map<int, double>> surf_w;
@@ -102,9 +101,11 @@ void check_inputs(const TetMesh& input, const TetMesh& deformed, const PolyCubeS
   const int nC = int(seg.charts.size());
   if (seg.chart.size() != seg.F.rows()) throw InvalidInput(input.source + ": segmentation has no chart per triangle");
   for (Eigen::Index f = 0; f < seg.F.rows(); ++f) {
-    if (seg.chart[f] < 0 || seg.chart[f] >= nC) throw InvalidInput(input.source + ": triangle " + std::to_string(f) + " has chart id out of range");
+    if (seg.chart[f] < 0 || seg.chart[f] >= nC)
+      throw InvalidInput(input.source + ": triangle " + std::to_string(f) + " has chart id out of range");
     for (int k = 0; k < 3; ++k)
-      if (seg.F(f, k) < 0 || seg.F(f, k) >= nV) throw InvalidInput(input.source + ": segmentation triangle index out of range");
+      if (seg.F(f, k) < 0 || seg.F(f, k) >= nV)
+        throw InvalidInput(input.source + ": segmentation triangle index out of range");
   }
 }
 
@@ -141,7 +142,8 @@ void chart_incidence(AxisInputs& in) {
     }
   in.chart_label.resize(size_t(nC));
   in.chart_neighbours.resize(size_t(nC));
-  for (int c = 0; c < nC; ++c) in.chart_label[c] = seg.charts[c].label, in.chart_neighbours[c] = seg.charts[c].neighbours;
+  for (int c = 0; c < nC; ++c)
+    in.chart_label[c] = seg.charts[c].label, in.chart_neighbours[c] = seg.charts[c].neighbours;
   in.on_boundary.assign(size_t(nV), 0);
   for (Eigen::Index f = 0; f < seg.F.rows(); ++f)
     for (int k = 0; k < 3; ++k) in.on_boundary[seg.F(f, k)] = 1;
@@ -218,7 +220,8 @@ struct PoissonStep {
   Eigen::VectorXd rhs, y;  ///< the system's right-hand side and solution
 };
 
-PoissonStep poisson_step(const AxisInputs& in, const AxisChartOrder& order, const std::vector<DistancePair>& dpairs, int a) {
+PoissonStep poisson_step(const AxisInputs& in, const AxisChartOrder& order, const std::vector<DistancePair>& dpairs,
+                         int a) {
   const RowMatrixX3d& Vd = in.Vd;
   const int nV = int(in.input.V.rows()), nG = order.groups;
   const std::vector<int>& vgroup = order.vertex_group;
@@ -249,7 +252,8 @@ PoissonStep poisson_step(const AxisInputs& in, const AxisChartOrder& order, cons
   for (int v = 0; v < nV; ++v)
     if (vgroup[v] < 0) trip.emplace_back(var[v], var[v], eps), rhs[var[v]] += eps * Vd(v, a);
   for (int g = 0; g < nG; ++g)
-    trip.emplace_back(nFree + g, nFree + g, eps * order.group_size[g]), rhs[nFree + g] += eps * order.group_size[g] * order.group_mean[g];
+    trip.emplace_back(nFree + g, nFree + g, eps * order.group_size[g]),
+        rhs[nFree + g] += eps * order.group_size[g] * order.group_mean[g];
   ps.A.resize(n, n);
   ps.A.setFromTriplets(trip.begin(), trip.end());
   throw_if_interrupted();
@@ -264,7 +268,8 @@ PoissonStep poisson_step(const AxisInputs& in, const AxisChartOrder& order, cons
 /// placement (chart_order.h), or every chart pushed up to at least one h above each chart below it, in
 /// topological order (longest path from the rounded values). The per-pair nudging before both could
 /// undo itself on conflicting pairs and leave orders swapped.
-std::vector<long> chart_levels(const AxisChartOrder& order, const PoissonStep& ps, const AxisInputs& in, PositionDeformStats& st) {
+std::vector<long> chart_levels(const AxisChartOrder& order, const PoissonStep& ps, const AxisInputs& in,
+                               PositionDeformStats& st) {
   const int nG = order.groups;
   const double h = in.h;
   std::vector<double> c(nG);
@@ -284,7 +289,8 @@ std::vector<long> chart_levels(const AxisChartOrder& order, const PoissonStep& p
   for (auto& o : order.ordered)
     if (o.sign * (k[o.q] - k[o.p]) < 1) ++st.flipped_after_rounding;
   for (int g = 0; g < nG; ++g)
-    st.chart_coordinates_rounded_max_shift = std::max(st.chart_coordinates_rounded_max_shift, std::abs(c[g] - k[g] * h) / h);
+    st.chart_coordinates_rounded_max_shift =
+        std::max(st.chart_coordinates_rounded_max_shift, std::abs(c[g] - k[g] * h) / h);
   return k;
 }
 
@@ -299,9 +305,12 @@ void final_poisson(const PoissonStep& ps, const std::vector<long>& k, const Axis
   for (int col = 0; col < ps.A.outerSize(); ++col)
     for (Eigen::SparseMatrix<double>::InnerIterator it(ps.A, col); it; ++it) {
       int r = int(it.row()), cc = int(it.col());
-      if (r < nFree && cc < nFree) tf.emplace_back(r, cc, it.value());
-      else if (r >= nFree && cc < nFree) b[cc] -= it.value() * k[r - nFree] * h;
-      else if (cc >= nFree && r < nFree) b[r] -= it.value() * k[cc - nFree] * h;
+      if (r < nFree && cc < nFree)
+        tf.emplace_back(r, cc, it.value());
+      else if (r >= nFree && cc < nFree)
+        b[cc] -= it.value() * k[r - nFree] * h;
+      else if (cc >= nFree && r < nFree)
+        b[r] -= it.value() * k[cc - nFree] * h;
     }
   Eigen::SparseMatrix<double> Af(nFree, nFree);
   Af.setFromTriplets(tf.begin(), tf.end());
@@ -330,8 +339,10 @@ void final_mvc(const PoissonStep& ps, const AxisInputs& in, const std::vector<in
     double sum = 0;
     auto add = [&](int j, double w) {
       sum += w;
-      if (vgroup[j] >= 0) b[r] += w * u[j];
-      else tf.emplace_back(r, var[j], -w);
+      if (vgroup[j] >= 0)
+        b[r] += w * u[j];
+      else
+        tf.emplace_back(r, var[j], -w);
     };
     if (in.on_boundary[v])
       for (auto& [j, w] : in.surf_w[v]) add(j, w);
@@ -396,7 +407,8 @@ void solve_axis(int a, const AxisInputs& in, PolyCubeMap& out, PositionDeformSta
   for (int c = 0; c < nC; ++c)
     if (label_axis(in.seg.charts[c].label) == a) axis_charts.push_back(c);
   if (axis_charts.empty())
-    throw InvalidInput(in.input.source + ": the PolyCube structure has no chart on axis " + std::string(1, char('X' + a)));
+    throw InvalidInput(in.input.source + ": the PolyCube structure has no chart on axis " +
+                       std::string(1, char('X' + a)));
   const AxisChartOrder order =
       chart_order_evidence(in.Vd, in.graph, in.vcharts, in.chart_label, in.chart_neighbours, a, h);
   st.merged_same_axis_charts += order.merged_same_axis_charts;
@@ -419,14 +431,17 @@ void solve_axis(int a, const AxisInputs& in, PolyCubeMap& out, PositionDeformSta
   for (int v = 0; v < nV; ++v)
     if (vgroup[v] >= 0) u[v] = k[vgroup[v]] * h;
   if (ps.nFree > 0) {
-    if (in.p.final_solve == FinalSolve::poisson) final_poisson(ps, k, in, vgroup, u);
-    else final_mvc(ps, in, vgroup, a, u, st);
+    if (in.p.final_solve == FinalSolve::poisson)
+      final_poisson(ps, k, in, vgroup, u);
+    else
+      final_mvc(ps, in, vgroup, a, u, st);
   }
   out.U.col(a) = u;
   st.seconds_final += since(t0);
   // Planarity: exact by substitution; measured anyway.
   for (int v = 0; v < nV; ++v)
-    if (vgroup[v] >= 0) st.planarity_error = std::max(st.planarity_error, std::abs(out.U(v, a) - k[vgroup[v]] * h) / in.diag);
+    if (vgroup[v] >= 0)
+      st.planarity_error = std::max(st.planarity_error, std::abs(out.U(v, a) - k[vgroup[v]] * h) / in.diag);
 }
 
 /// The per-axis statistics merged into st, in axis order.
@@ -440,7 +455,8 @@ void merge_axes(const std::array<PositionDeformStats, 3>& axis_stats, PositionDe
     st.flipped_after_rounding += s.flipped_after_rounding;
     st.final_iterations += s.final_iterations;
     st.final_ilu_axes += s.final_ilu_axes;
-    st.chart_coordinates_rounded_max_shift = std::max(st.chart_coordinates_rounded_max_shift, s.chart_coordinates_rounded_max_shift);
+    st.chart_coordinates_rounded_max_shift =
+        std::max(st.chart_coordinates_rounded_max_shift, s.chart_coordinates_rounded_max_shift);
     st.planarity_error = std::max(st.planarity_error, s.planarity_error);
     st.seconds_poisson += s.seconds_poisson;
     st.seconds_final += s.seconds_final;
@@ -465,7 +481,8 @@ void untangle(const TetMesh& input, const PolyCubeSegmentation& seg, const Posit
 
 /// Inverted tets and distortion of input -> PolyCube. A few near-degenerate tets have distortions of
 /// 1e10 and more, so the mean says nothing: the median, the 99th percentile and the max.
-void measure_distortion(const TetMesh& input, const RowMatrixX3d& U, const PositionDeformParams& p, PositionDeformStats& st) {
+void measure_distortion(const TetMesh& input, const RowMatrixX3d& U, const PositionDeformParams& p,
+                        PositionDeformStats& st) {
   std::vector<double> dist(size_t(input.T.rows()), -1.0);
   oneapi::tbb::parallel_for(Eigen::Index(0), input.T.rows(), [&](Eigen::Index t) {
     Eigen::Vector3d q[4], Q[4];
@@ -476,8 +493,10 @@ void measure_distortion(const TetMesh& input, const RowMatrixX3d& U, const Posit
   std::vector<double> ok;
   ok.reserve(dist.size());
   for (double d : dist)
-    if (d < 0) ++st.inverted_tets;
-    else if (std::isfinite(d)) ok.push_back(d);
+    if (d < 0)
+      ++st.inverted_tets;
+    else if (std::isfinite(d))
+      ok.push_back(d);
   if (p.untangle_iterations == 0)  // no untangling: the final solve's folds are the map's
     st.untangle.inverted_before = st.untangle.inverted_after = st.inverted_tets;
   if (!ok.empty()) {

@@ -38,12 +38,12 @@
 ///     untangled region. See docs/position_deform.md.
 #pragma once
 
-#include <memory>
-#include <string>
-
 #include "nodes/artefacts/polycube_map.h"
 #include "nodes/position_deform/untangle_map.h"
 #include "runtime/progress.h"
+
+#include <memory>
+#include <string>
 
 namespace polyhex {
 
@@ -55,39 +55,45 @@ enum class LevelPlacement { balanced, push_up };
 enum class MapPolish { region, everywhere };
 
 struct PositionDeformParams {
-  double edge_length = 0.01;        ///< hex edge length h, fraction of the input's reference length (nodes/algorithms/reference_length.h) (§6: 1 %), [1e-4, 0.5]
-  double distance_weight = 1.0;     ///< scale s of the distance-preservation constraints (0 disables them), [0, 1e6]
+  double edge_length = 0.01;     ///< hex edge length h, fraction of the input's reference length
+                                 ///< (nodes/algorithms/reference_length.h) (§6: 1 %), [1e-4, 0.5]
+  double distance_weight = 1.0;  ///< scale s of the distance-preservation constraints (0 disables them), [0, 1e6]
   FinalSolve final_solve = FinalSolve::mvc_laplace;  ///< mvc_laplace (§5.2) or poisson
-  LevelPlacement level_placement = LevelPlacement::balanced;  ///< chart levels: balanced (chart_order.h place_levels) or push_up
-  int final_jacobi_iterations = 0;     ///< mvc_laplace: BiCGSTAB iterations with the diagonal preconditioner before the
-                                       ///< incomplete LU takes over (0 = incomplete LU at once), [0, 1e6]. Faster, but off
-                                       ///< by default: the meshes change (docs/position_deform.md)
-  int untangle_iterations = 600;    ///< L-BFGS iterations of the map's untangling (untangle_map.h); 0 = keep the folds, [0, 1e6]
-  int untangle_rings = 2;           ///< the untangling moves the inverted tets' vertices grown by this many rings, [0, 50]
-  double untangle_seconds = 0;      ///< wall-time cap of the untangling (0 = none; a cap that is hit makes runs load-dependent), [0, 3600]
-  MapPolish map_polish = MapPolish::everywhere;  ///< after the untangling, L-BFGS at ε -> 0 on the Winslow energy of the whole map
-                                               ///< (everywhere: every tet towards a similarity) or of the untangled region only (region)
-  double max_hexes = 2e7;           ///< refuse up front when the hex count estimate (volume / h³) exceeds this, [1e3, 2e9]
+  LevelPlacement level_placement =
+      LevelPlacement::balanced;     ///< chart levels: balanced (chart_order.h place_levels) or push_up
+  int final_jacobi_iterations = 0;  ///< mvc_laplace: BiCGSTAB iterations with the diagonal preconditioner before the
+                                    ///< incomplete LU takes over (0 = incomplete LU at once), [0, 1e6]. Faster, but off
+                                    ///< by default: the meshes change (docs/position_deform.md)
+  int untangle_iterations =
+      600;                 ///< L-BFGS iterations of the map's untangling (untangle_map.h); 0 = keep the folds, [0, 1e6]
+  int untangle_rings = 2;  ///< the untangling moves the inverted tets' vertices grown by this many rings, [0, 50]
+  double untangle_seconds =
+      0;  ///< wall-time cap of the untangling (0 = none; a cap that is hit makes runs load-dependent), [0, 3600]
+  MapPolish map_polish =
+      MapPolish::everywhere;  ///< after the untangling, L-BFGS at ε -> 0 on the Winslow energy of the whole map
+                              ///< (everywhere: every tet towards a similarity) or of the untangled region only (region)
+  double max_hexes = 2e7;     ///< refuse up front when the hex count estimate (volume / h³) exceeds this, [1e3, 2e9]
 };
 
 struct PositionDeformStats {
   int charts = 0;
-  int distance_pairs = 0;               ///< same-axis chart pairs with a distance constraint
-  int ordered_pairs = 0;                ///< pairs whose order rounding must keep (distance pairs + bridged pairs)
-  int flipped_chart_orders = 0;         ///< ordered pairs whose order the Poisson step swapped (before the rounding fix)
-  int flipped_after_rounding = 0;       ///< ordered pairs still swapped or merged after the rounding fix (should be 0)
-  int order_constraints_dropped = 0;    ///< ordered pairs dropped because they contradict stronger evidence (a cycle)
-  int merged_same_axis_charts = 0;      ///< same-axis charts sharing a vertex, forced onto one plane
+  int distance_pairs = 0;             ///< same-axis chart pairs with a distance constraint
+  int ordered_pairs = 0;              ///< pairs whose order rounding must keep (distance pairs + bridged pairs)
+  int flipped_chart_orders = 0;       ///< ordered pairs whose order the Poisson step swapped (before the rounding fix)
+  int flipped_after_rounding = 0;     ///< ordered pairs still swapped or merged after the rounding fix (should be 0)
+  int order_constraints_dropped = 0;  ///< ordered pairs dropped because they contradict stronger evidence (a cycle)
+  int merged_same_axis_charts = 0;    ///< same-axis charts sharing a vertex, forced onto one plane
   double chart_coordinates_rounded_max_shift = 0;  ///< max |c − k h| / h over charts
-  int inverted_tets = 0;                ///< tets of the PolyCube map with signed volume <= 0 (after the untangling)
-  MapUntangleStats untangle;            ///< the untangling's figures; inverted_before = as the final solve leaves
-                                        ///< them (concave edges, Fig. 9). Off: both counts = inverted_tets, the rest 0
-  double distortion = 0;                ///< median conformal distortion ||J||_F ||J^-1||_F / 3 (input -> PolyCube) of non-inverted tets
-  double distortion_p99 = 0;            ///< its 99th percentile
+  int inverted_tets = 0;      ///< tets of the PolyCube map with signed volume <= 0 (after the untangling)
+  MapUntangleStats untangle;  ///< the untangling's figures; inverted_before = as the final solve leaves
+                              ///< them (concave edges, Fig. 9). Off: both counts = inverted_tets, the rest 0
+  double distortion =
+      0;  ///< median conformal distortion ||J||_F ||J^-1||_F / 3 (input -> PolyCube) of non-inverted tets
+  double distortion_p99 = 0;  ///< its 99th percentile
   double distortion_max = 0;
-  double planarity_error = 0;           ///< max distance of a chart vertex from its plane / bbox diagonal (0 by construction)
-  int final_iterations = 0;             ///< BiCGSTAB iterations of the mvc_laplace final solves (three axes)
-  int final_ilu_axes = 0;               ///< axes whose final solve used the incomplete LU preconditioner
+  double planarity_error = 0;  ///< max distance of a chart vertex from its plane / bbox diagonal (0 by construction)
+  int final_iterations = 0;    ///< BiCGSTAB iterations of the mvc_laplace final solves (three axes)
+  int final_ilu_axes = 0;      ///< axes whose final solve used the incomplete LU preconditioner
   double seconds_poisson = 0, seconds_final = 0;  ///< summed over the three axes (which run in parallel)
 };
 

@@ -1,87 +1,101 @@
 // Binding of the position-driven deformation (paper §5.2).
-#include "graph/node.h"
-#include "nodes/formats/tetmesh_io.h"
-#include "nodes/formats/polycube_vtk.h"
 #include "nodes/position_deform/position_deform.h"
+
+#include "graph/node.h"
+#include "nodes/formats/polycube_vtk.h"
+#include "nodes/formats/tetmesh_io.h"
 
 namespace polyhex {
 namespace {
 
 using P = PositionDeformParams;
 
-const bool registered = register_node(make_node<P>(
-    "position_deform/chart_planes",
-    "§5.2 PolyCube map: charts onto integer planes (hex edge units), distance constraints, MVC Laplace",
-    ParamSet<P>()
-        .add("edge_length", &P::edge_length, "hex edge length, fraction of the input's reference length", 1e-4, 0.5)
-        .add("distance_weight", &P::distance_weight, "scale of the same-axis chart distance constraints (0 = off)", 0.0, 1e6)
-        .add_enum("final_solve", &P::final_solve, {{FinalSolve::mvc_laplace, "mvc_laplace"}, {FinalSolve::poisson, "poisson"}},
-                    "final solve with pinned charts: mean value Laplace (paper) or Poisson")
-        .add_enum("level_placement", &P::level_placement,
-                  {{LevelPlacement::balanced, "balanced"}, {LevelPlacement::push_up, "push_up"}},
-                    "chart levels keeping the orders apart: weighted least-squares placement, or the push of each chart above those below it")
-        .add("final_jacobi_iterations", &P::final_jacobi_iterations,
-             "mvc_laplace: BiCGSTAB iterations with the diagonal preconditioner before the incomplete LU (0 = ILU at once, the default: see position_deform.h)", 0, 1000000)
-        .add("untangle_iterations", &P::untangle_iterations, "L-BFGS iterations of the map's untangling (0 = keep the folds)", 0, 1000000)
-        .add("untangle_rings", &P::untangle_rings, "the untangling moves the inverted tets' vertices grown by this many rings", 0, 50)
-        .add("untangle_seconds", &P::untangle_seconds, "wall-time cap of the untangling (0 = none)", 0.0, 3600.0)
-        .add_enum("map_polish", &P::map_polish, {{MapPolish::region, "region"}, {MapPolish::everywhere, "everywhere"}},
-                    "after the untangling, the barrier polish of the untangled region or of the whole map")
-        .add("max_hexes", &P::max_hexes, "refuse up front when volume / h^3 exceeds this", 1e3, 2e9),
-    {{"tets", artefact_name<TetMesh>()},
-     {"deformed", artefact_name<TetMesh>()},
-     {"segmentation", artefact_name<PolyCubeSegmentation>()}},
-    artefact_name<PolyCubeMap>(),
-    [](const P& p, const Inputs& in, NodeContext& ctx) {
-      PositionDeformStats s;
-      PolyCubeMap m = position_deform(in.get<TetMesh>(0), *in.get<TetMesh>(1), in.get<PolyCubeSegmentation>(2), p, &s,
-                                      ctx.progress_fn());
-      auto& j = ctx.metrics;
-      j["charts"] = s.charts;
-      j["distance_pairs"] = s.distance_pairs;
-      j["ordered_pairs"] = s.ordered_pairs;
-      j["flipped_chart_orders"] = s.flipped_chart_orders;
-      j["flipped_after_rounding"] = s.flipped_after_rounding;
-      j["order_constraints_dropped"] = s.order_constraints_dropped;
-      j["merged_same_axis_charts"] = s.merged_same_axis_charts;
-      j["chart_coordinates_rounded_max_shift"] = s.chart_coordinates_rounded_max_shift;
-      j["inverted_tets"] = s.inverted_tets;
-      j["inverted_tets_before_untangle"] = s.untangle.inverted_before;
-      j["untangle_free_vertices"] = s.untangle.free_vertices;
-      j["flat_tets"] = s.untangle.flat;
-      j["untangle_lbfgs_iterations"] = s.untangle.lbfgs_iterations;
-      j["untangle_polish_iterations"] = s.untangle.polish_iterations;
-      j["untangle_time_budget_hit"] = s.untangle.time_budget_hit;
-      j["seconds_untangle"] = s.untangle.seconds;
-      j["distortion"] = s.distortion;
-      j["distortion_p99"] = s.distortion_p99;
-      j["distortion_max"] = s.distortion_max;
-      j["planarity_error"] = s.planarity_error;
-      j["edge_length_abs"] = m.edge_length;
-      j["seconds_poisson"] = s.seconds_poisson;
-      j["seconds_final"] = s.seconds_final;
-      j["final_iterations"] = s.final_iterations;
-      j["final_ilu_axes"] = s.final_ilu_axes;
-      if (s.flipped_after_rounding > 0)
-        ctx.warn(std::to_string(s.flipped_after_rounding) + " same-axis chart pairs could not keep their order after rounding");
-      if (s.merged_same_axis_charts > 0)
-        ctx.warn(std::to_string(s.merged_same_axis_charts) + " same-axis charts share a vertex and were put on one plane");
-      return make_artefact(std::move(m));
-    }).with_version("5"));
+const bool registered = register_node(
+    make_node<P>(
+        "position_deform/chart_planes",
+        "§5.2 PolyCube map: charts onto integer planes (hex edge units), distance constraints, MVC Laplace",
+        ParamSet<P>()
+            .add("edge_length", &P::edge_length, "hex edge length, fraction of the input's reference length", 1e-4, 0.5)
+            .add("distance_weight", &P::distance_weight, "scale of the same-axis chart distance constraints (0 = off)",
+                 0.0, 1e6)
+            .add_enum("final_solve", &P::final_solve,
+                      {{FinalSolve::mvc_laplace, "mvc_laplace"}, {FinalSolve::poisson, "poisson"}},
+                      "final solve with pinned charts: mean value Laplace (paper) or Poisson")
+            .add_enum("level_placement", &P::level_placement,
+                      {{LevelPlacement::balanced, "balanced"}, {LevelPlacement::push_up, "push_up"}},
+                      "chart levels keeping the orders apart: weighted least-squares placement, or the push of each "
+                      "chart above those below it")
+            .add("final_jacobi_iterations", &P::final_jacobi_iterations,
+                 "mvc_laplace: BiCGSTAB iterations with the diagonal preconditioner before the incomplete LU (0 = ILU "
+                 "at once, the default: see position_deform.h)",
+                 0, 1000000)
+            .add("untangle_iterations", &P::untangle_iterations,
+                 "L-BFGS iterations of the map's untangling (0 = keep the folds)", 0, 1000000)
+            .add("untangle_rings", &P::untangle_rings,
+                 "the untangling moves the inverted tets' vertices grown by this many rings", 0, 50)
+            .add("untangle_seconds", &P::untangle_seconds, "wall-time cap of the untangling (0 = none)", 0.0, 3600.0)
+            .add_enum("map_polish", &P::map_polish,
+                      {{MapPolish::region, "region"}, {MapPolish::everywhere, "everywhere"}},
+                      "after the untangling, the barrier polish of the untangled region or of the whole map")
+            .add("max_hexes", &P::max_hexes, "refuse up front when volume / h^3 exceeds this", 1e3, 2e9),
+        {{"tets", artefact_name<TetMesh>()},
+         {"deformed", artefact_name<TetMesh>()},
+         {"segmentation", artefact_name<PolyCubeSegmentation>()}},
+        artefact_name<PolyCubeMap>(),
+        [](const P& p, const Inputs& in, NodeContext& ctx) {
+          PositionDeformStats s;
+          PolyCubeMap m = position_deform(in.get<TetMesh>(0), *in.get<TetMesh>(1), in.get<PolyCubeSegmentation>(2), p,
+                                          &s, ctx.progress_fn());
+          auto& j = ctx.metrics;
+          j["charts"] = s.charts;
+          j["distance_pairs"] = s.distance_pairs;
+          j["ordered_pairs"] = s.ordered_pairs;
+          j["flipped_chart_orders"] = s.flipped_chart_orders;
+          j["flipped_after_rounding"] = s.flipped_after_rounding;
+          j["order_constraints_dropped"] = s.order_constraints_dropped;
+          j["merged_same_axis_charts"] = s.merged_same_axis_charts;
+          j["chart_coordinates_rounded_max_shift"] = s.chart_coordinates_rounded_max_shift;
+          j["inverted_tets"] = s.inverted_tets;
+          j["inverted_tets_before_untangle"] = s.untangle.inverted_before;
+          j["untangle_free_vertices"] = s.untangle.free_vertices;
+          j["flat_tets"] = s.untangle.flat;
+          j["untangle_lbfgs_iterations"] = s.untangle.lbfgs_iterations;
+          j["untangle_polish_iterations"] = s.untangle.polish_iterations;
+          j["untangle_time_budget_hit"] = s.untangle.time_budget_hit;
+          j["seconds_untangle"] = s.untangle.seconds;
+          j["distortion"] = s.distortion;
+          j["distortion_p99"] = s.distortion_p99;
+          j["distortion_max"] = s.distortion_max;
+          j["planarity_error"] = s.planarity_error;
+          j["edge_length_abs"] = m.edge_length;
+          j["seconds_poisson"] = s.seconds_poisson;
+          j["seconds_final"] = s.seconds_final;
+          j["final_iterations"] = s.final_iterations;
+          j["final_ilu_axes"] = s.final_ilu_axes;
+          if (s.flipped_after_rounding > 0)
+            ctx.warn(std::to_string(s.flipped_after_rounding) +
+                     " same-axis chart pairs could not keep their order after rounding");
+          if (s.merged_same_axis_charts > 0)
+            ctx.warn(std::to_string(s.merged_same_axis_charts) +
+                     " same-axis charts share a vertex and were put on one plane");
+          return make_artefact(std::move(m));
+        })
+        .with_version("5"));
 
 // --save-all writes the PolyCube map as the tet mesh at its PolyCube positions (<id>.polycube.vtk) and
 // the PolyCube surface with chart ids and labels as cell data (<id>.polycube_surface.vtk).
 const bool saver_registered = [] {
-  Registry::instance().add_saver(artefact_name<PolyCubeMap>(), ".polycube.vtk", [](const Artefact& a, const std::filesystem::path& path) {
-    auto m = a.as<PolyCubeMap>();
-    TetMesh t;
-    t.V = m->U;
-    t.T = m->input->T;
-    write_tetmesh(t, path);
-    std::string surface = path.string();
-    surface.replace(surface.size() - std::string(".vtk").size(), std::string::npos, "_surface.vtk");
-    write_polycube_vtk(surface, m->U, *m->segmentation);
-  });
+  Registry::instance().add_saver(
+      artefact_name<PolyCubeMap>(), ".polycube.vtk", [](const Artefact& a, const std::filesystem::path& path) {
+        auto m = a.as<PolyCubeMap>();
+        TetMesh t;
+        t.V = m->U;
+        t.T = m->input->T;
+        write_tetmesh(t, path);
+        std::string surface = path.string();
+        surface.replace(surface.size() - std::string(".vtk").size(), std::string::npos, "_surface.vtk");
+        write_polycube_vtk(surface, m->U, *m->segmentation);
+      });
   Registry::instance().add_turner(artefact_name<PolyCubeMap>(), [](const Artefact& a, const Eigen::Matrix3d& R) {
     PolyCubeMap m = *a.as<PolyCubeMap>();
     TetMesh input = *m.input;

@@ -1,6 +1,10 @@
 // Untangling of the PolyCube map by L-BFGS on the regularised Winslow energy. See untangle_map.h.
 #include "nodes/position_deform/untangle_map.h"
 
+#include "nodes/algorithms/hex_corners.h"
+#include "nodes/artefacts/cell_rings.h"
+#include "runtime/lbfgs.h"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -8,10 +12,6 @@
 #include <cmath>
 #include <initializer_list>
 #include <limits>
-
-#include "nodes/artefacts/cell_rings.h"
-#include "nodes/algorithms/hex_corners.h"
-#include "runtime/lbfgs.h"
 
 namespace polyhex {
 namespace {
@@ -70,8 +70,9 @@ class MapUntangler {
         return count_inverted() == 0;
       };
       const int iterations = int(std::min<long>(p_.lbfgs_iterations, p_.max_iterations - st_.lbfgs_iterations));
-      untangled = lbfgs_minimize(x, [&](const VecX& y, VecX* g) { return energy(y, eps, g); }, options(iterations), stop,
-                                 &st_.lbfgs_iterations) == LbfgsEnd::Stopped &&
+      untangled = lbfgs_minimize(
+                      x, [&](const VecX& y, VecX* g) { return energy(y, eps, g); }, options(iterations), stop,
+                      &st_.lbfgs_iterations) == LbfgsEnd::Stopped &&
                   !st_.time_budget_hit;
       apply(x);
       const long before_round = st_.inverted_after;
@@ -140,8 +141,9 @@ class MapUntangler {
         good = y;
         return false;
       };
-      if (lbfgs_minimize(x, [&](const VecX& y, VecX* g) { return energy(y, 1e-10, g); }, options(p_.polish_iterations),
-                         stop, &st_.polish_iterations) != LbfgsEnd::Stopped) {
+      if (lbfgs_minimize(
+              x, [&](const VecX& y, VecX* g) { return energy(y, 1e-10, g); }, options(p_.polish_iterations), stop,
+              &st_.polish_iterations) != LbfgsEnd::Stopped) {
         apply(x);
         if (count_inverted() == 0) good = x;
       }
@@ -211,7 +213,8 @@ class MapUntangler {
   /// active tets: those with a free vertex.
   void select(const std::vector<char>& inv) {
     const Eigen::Index nv = U_.rows(), nt = T_.rows();
-    const std::vector<char> region = cell_ring_region(T_, nv, p_.rings, [&](Eigen::Index t) { return inv[size_t(t)] == 1; });
+    const std::vector<char> region =
+        cell_ring_region(T_, nv, p_.rings, [&](Eigen::Index t) { return inv[size_t(t)] == 1; });
     std::vector<char> skip(size_t(nt), 0);
     for (Eigen::Index t = 0; t < nt; ++t) skip[size_t(t)] = inv[size_t(t)] >= 2;
     build(region, skip);
@@ -338,15 +341,15 @@ class MapUntangler {
   MapUntangleStats& st_;
   std::chrono::steady_clock::time_point t0_;
 
-  std::vector<int> dof_;                   ///< #V first unknown of a free vertex, -1 otherwise
+  std::vector<int> dof_;  ///< #V first unknown of a free vertex, -1 otherwise
   Eigen::Index ndof_ = 0;
-  std::vector<int> free_;                  ///< free vertices
-  std::vector<std::array<int, 3>> axes_;   ///< per free vertex: its moving axes, -1 padded
-  std::vector<int> active_;                ///< tets with a free vertex
-  std::vector<Mat3> rinv_;                 ///< per active tet: inverse of its input edge matrix
-  std::vector<double> weight_;             ///< per active tet: input volume over the mean
+  std::vector<int> free_;                 ///< free vertices
+  std::vector<std::array<int, 3>> axes_;  ///< per free vertex: its moving axes, -1 padded
+  std::vector<int> active_;               ///< tets with a free vertex
+  std::vector<Mat3> rinv_;                ///< per active tet: inverse of its input edge matrix
+  std::vector<double> weight_;            ///< per active tet: input volume over the mean
   double mean_edge_ = 1;
-  CellIncidence inc_;                      ///< per free vertex: (active tet, corner) pairs
+  CellIncidence inc_;  ///< per free vertex: (active tet, corner) pairs
   std::vector<Vec3> base_;
   std::vector<double> tet_energy_;
   std::vector<Mat43> tet_grad_;

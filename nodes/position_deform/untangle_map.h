@@ -19,32 +19,32 @@
 /// Deterministic: per-tet terms are computed in parallel into arrays and summed in a fixed order.
 #pragma once
 
+#include "nodes/artefacts/meshes.h"
+
 #include <cstdint>
 #include <vector>
-
-#include "nodes/artefacts/meshes.h"
 
 namespace polyhex {
 
 struct MapUntangleParams {
-  int rounds = 30;              ///< ε updates (each followed by one L-BFGS run); 0 = no untangling, [0, 1000]
-  int lbfgs_iterations = 200;   ///< iterations of one L-BFGS run, [1, 100000]
-  long max_iterations = 600;    ///< L-BFGS iterations of all rounds together (the polish apart); 0 = no untangling
-  int rings = 2;                ///< free vertices: the inverted tets' vertices grown by this many tet rings, [0, 50]
-  int polish_iterations = 200;  ///< after the rounds: L-BFGS iterations at ε -> 0 on the region, [0, 100000]
-  bool polish_everywhere = false;  ///< the polish moves every vertex that may move (not only the untangled region), also
-                                   ///< when nothing was inverted: the map as a whole towards a conformal one
-  double seconds = 0;           ///< wall-time cap, checked per L-BFGS iteration (the map so far is kept); 0 = none.
-                                ///< The iteration budget keeps runs deterministic; a cap that is hit does not
+  int rounds = 30;                 ///< ε updates (each followed by one L-BFGS run); 0 = no untangling, [0, 1000]
+  int lbfgs_iterations = 200;      ///< iterations of one L-BFGS run, [1, 100000]
+  long max_iterations = 600;       ///< L-BFGS iterations of all rounds together (the polish apart); 0 = no untangling
+  int rings = 2;                   ///< free vertices: the inverted tets' vertices grown by this many tet rings, [0, 50]
+  int polish_iterations = 200;     ///< after the rounds: L-BFGS iterations at ε -> 0 on the region, [0, 100000]
+  bool polish_everywhere = false;  ///< the polish moves every vertex that may move (not only the untangled region),
+                                   ///< also when nothing was inverted: the map as a whole towards a conformal one
+  double seconds = 0;              ///< wall-time cap, checked per L-BFGS iteration (the map so far is kept); 0 = none.
+                                   ///< The iteration budget keeps runs deterministic; a cap that is hit does not
 };
 
 struct MapUntangleStats {
   long inverted_before = 0, inverted_after = 0;  ///< tets with signed PolyCube volume <= 0
-  long flat = 0;                ///< of them, tets no move that keeps the PolyCube can open (4 vertices on a plane, 3 on an edge line)
+  long flat = 0;  ///< of them, tets no move that keeps the PolyCube can open (4 vertices on a plane, 3 on an edge line)
   long free_vertices = 0;
-  int rounds = 0;               ///< ε updates done
-  long lbfgs_iterations = 0;    ///< L-BFGS iterations of the untangling rounds
-  long polish_iterations = 0;   ///< L-BFGS iterations of the polish
+  int rounds = 0;              ///< ε updates done
+  long lbfgs_iterations = 0;   ///< L-BFGS iterations of the untangling rounds
+  long polish_iterations = 0;  ///< L-BFGS iterations of the polish
   bool time_budget_hit = false;
   double seconds = 0;
 };

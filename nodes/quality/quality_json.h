@@ -3,9 +3,9 @@
 /// quality node's metrics and by `polyhex check`.
 #pragma once
 
-#include <nlohmann/json.hpp>
-
 #include "nodes/algorithms/hex_quality.h"
+
+#include <nlohmann/json.hpp>
 
 namespace polyhex {
 

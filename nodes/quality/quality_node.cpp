@@ -21,7 +21,8 @@ const bool registered = register_node(make_node<QualityParams>(
       ctx.metrics.update(to_json(q));
       // Beyond hexcheck's keys: which way the distances were measured (one-sided against an open input).
       if (q.has_surface) ctx.metrics["hausdorff_sides"] = q.surface_closed ? "symmetric" : "surface_to_mesh";
-      if (q.inverted > 0) ctx.warn(std::to_string(q.inverted) + " of " + std::to_string(q.hexes) + " hexes are inverted");
+      if (q.inverted > 0)
+        ctx.warn(std::to_string(q.inverted) + " of " + std::to_string(q.hexes) + " hexes are inverted");
       return Artefact{};
     }));
 

@@ -1,22 +1,22 @@
 #include "nodes/rotation_deform/rotation_deform.h"
 
+#include "nodes/artefacts/polycube.h"
+#include "runtime/cancel.h"
+#include "runtime/errors.h"
+
 #include <Eigen/Geometry>
 #include <Eigen/SparseCore>
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <limits>
 #include <functional>
+#include <limits>
 #include <numeric>
-
-#include "nodes/artefacts/polycube.h"
-#include "runtime/cancel.h"
-#include "runtime/errors.h"
 
 namespace polyhex {
 
@@ -240,8 +240,8 @@ Eigen::SparseMatrix<double> laplacian_lower(const Topology& top, const std::vect
   std::vector<int> upper_start(n);
   long nnz = 0;
   for (int j = 0; j < n; ++j) {
-    upper_start[j] = static_cast<int>(std::upper_bound(top.neighbours.begin(j), top.neighbours.end(j), j) -
-                                      top.neighbours.begin(j));
+    upper_start[j] =
+        static_cast<int>(std::upper_bound(top.neighbours.begin(j), top.neighbours.end(j), j) - top.neighbours.begin(j));
     nnz += 1 + top.neighbours.size(j) - upper_start[j];
   }
   A.resizeNonZeros(nnz);
@@ -364,7 +364,9 @@ Eigen::Vector4d coherent_quaternion(const Eigen::Matrix3d& R) {
   return q.normalized();
 }
 
-Eigen::Matrix3d axis_aligning_rotation(const Eigen::Vector3d& n) { return axis_aligning_rotation(n, label_dir(closest_label(n))); }
+Eigen::Matrix3d axis_aligning_rotation(const Eigen::Vector3d& n) {
+  return axis_aligning_rotation(n, label_dir(closest_label(n)));
+}
 
 Eigen::Matrix3d axis_aligning_rotation(const Eigen::Vector3d& n, const Eigen::Vector3d& a) {
   // Rodrigues for the rotation about n x a by the angle between them; c = n.a > 0 (>= 1/sqrt(3) for the
@@ -389,7 +391,9 @@ double axis_alignment(const RowMatrixX3d& V, const RowMatrixX3i& F, double angle
         acc.second += a;
         if (a > 0 && n.cwiseAbs().maxCoeff() >= c * a) acc.first += a;
       },
-      [](const Areas& x, const Areas& y) { return Areas{x.first + y.first, x.second + y.second}; });
+      [](const Areas& x, const Areas& y) {
+        return Areas{x.first + y.first, x.second + y.second};
+      });
   return s.second > 0 ? s.first / s.second : 0.0;
 }
 
@@ -403,15 +407,24 @@ struct IterationBuffers {
   RowMatrixX3d face_a;                  ///< area vectors
   std::vector<Eigen::Vector4d> target;  ///< per boundary vertex its target quaternion
   std::vector<char> known, known_next, feature;
-  Eigen::MatrixXd Bq, Bp;               ///< right-hand sides: quaternion Laplace, positions
-  std::vector<Eigen::Matrix3d> rot;     ///< per vertex its rotation
-  std::vector<int> blabel;   ///< direction label (polycube.h) closest to a non-feature boundary vertex's normal, -1 feature
+  Eigen::MatrixXd Bq, Bp;            ///< right-hand sides: quaternion Laplace, positions
+  std::vector<Eigen::Matrix3d> rot;  ///< per vertex its rotation
+  std::vector<int>
+      blabel;  ///< direction label (polycube.h) closest to a non-feature boundary vertex's normal, -1 feature
   std::vector<double> bangle;  ///< degrees between the vertex normal and that direction
 
   IterationBuffers(const Topology& top, int n)
-      : face_n(top.F.rows(), 3), face_a(top.F.rows(), 3), target(top.bverts.size()), known(top.bverts.size()),
-        known_next(top.bverts.size()), feature(top.bverts.size()), Bq(Eigen::MatrixXd::Zero(n, 4)), Bp(n, 3),
-        rot(size_t(n)), blabel(top.bverts.size(), -1), bangle(top.bverts.size(), 0.0) {}
+      : face_n(top.F.rows(), 3),
+        face_a(top.F.rows(), 3),
+        target(top.bverts.size()),
+        known(top.bverts.size()),
+        known_next(top.bverts.size()),
+        feature(top.bverts.size()),
+        Bq(Eigen::MatrixXd::Zero(n, 4)),
+        Bp(n, 3),
+        rot(size_t(n)),
+        blabel(top.bverts.size(), -1),
+        bangle(top.bverts.size(), 0.0) {}
 };
 
 /// Steps 1-3: boundary normals (area weighted) and features; per non-feature boundary vertex (§4.1) the
@@ -504,8 +517,7 @@ void position_rhs(const Topology& top, const RowMatrixX3d& V, const RotationDefo
       // Edge (j, i) gets -e: rows i and j stay consistent.
       const int bj = bi >= 0 ? top.bindex[*j] : -1;
       if (params.flatten > 0 && bj >= 0 && b.blabel[bi] >= 0 && b.blabel[bj] == b.blabel[bi] &&
-          std::find(top.bvert_neighbours.begin(bi), top.bvert_neighbours.end(bi), bj) !=
-              top.bvert_neighbours.end(bi)) {
+          std::find(top.bvert_neighbours.begin(bi), top.bvert_neighbours.end(bi), bj) != top.bvert_neighbours.end(bi)) {
         const double angle = std::max(b.bangle[bi], b.bangle[bj]);
         const double w = angle <= full ? 1.0 : angle >= none ? 0.0 : (none - angle) / (none - full);
         e[label_axis(b.blabel[bi])] *= 1.0 - params.flatten * w;

@@ -77,50 +77,56 @@
 /// flattens; the flattening term acts exactly at that scale.
 #pragma once
 
+#include "nodes/artefacts/meshes.h"
+#include "runtime/factorization.h"
+
 #include <Eigen/Core>
+
 #include <functional>
 #include <string>
 #include <vector>
-
-#include "nodes/artefacts/meshes.h"
-#include "runtime/factorization.h"
 
 namespace polyhex {
 
 /// Parameters of rotation_deform (JSON keys are the field names).
 struct RotationDeformParams {
-  int iterations = 5;            ///< rotation-driven iterations (§4.2: 5), range [1, 50]
-  double anchor_weight = 1.0;    ///< w, weight of the soft boundary anchors (§4.1: unit), (0, 1e6]
-  double feature_angle = 60.0;   ///< degrees: a vertex whose incident boundary normals differ by more is a feature, [0, 180]
-  double flatten = 1.0;          ///< β of the surface flattening in Eq. 1 (0 = the paper's Eq. 1; see the file comment), [0, 1]
-  double flatten_full_angle = 30;  ///< degrees: edges whose end normals are within this of their axis get the full β, [0, 90]
-  double flatten_max_angle = 50;   ///< degrees: from this deviation on no flattening (linear between), (flatten_full_angle, 90]
-  SolveMode solve_mode = SolveMode::MultiColumn;  ///< one 4- and one 3-column solve, or TBB over columns (runtime/factorization.h)
+  int iterations = 5;          ///< rotation-driven iterations (§4.2: 5), range [1, 50]
+  double anchor_weight = 1.0;  ///< w, weight of the soft boundary anchors (§4.1: unit), (0, 1e6]
+  double feature_angle =
+      60.0;              ///< degrees: a vertex whose incident boundary normals differ by more is a feature, [0, 180]
+  double flatten = 1.0;  ///< β of the surface flattening in Eq. 1 (0 = the paper's Eq. 1; see the file comment), [0, 1]
+  double flatten_full_angle =
+      30;  ///< degrees: edges whose end normals are within this of their axis get the full β, [0, 90]
+  double flatten_max_angle =
+      50;  ///< degrees: from this deviation on no flattening (linear between), (flatten_full_angle, 90]
+  SolveMode solve_mode =
+      SolveMode::MultiColumn;    ///< one 4- and one 3-column solve, or TBB over columns (runtime/factorization.h)
   bool save_iterations = false;  ///< the binding writes each iteration's mesh as <out>/<id>.iter<k>.vtk
 };
 
 /// Figures of one iteration, measured on its deformed mesh.
 struct RotationIterationStats {
-  double alignment = 0;          ///< area fraction of boundary triangles whose normal is within 15° of its closest axis
-  int inverted_tets = 0;         ///< tets with non-positive signed volume
-  double distortion = 0;         ///< mean conformal distortion ||F||_F ||F^-1||_F / 3 (1 = similarity) of the non-inverted tets, F relative to the run's input
-  double distortion_max = 0;     ///< max of the same
-  double volume_ratio = 0;       ///< total signed volume / input volume
-  double min_quaternion_norm = 0;///< smallest |q| of the interpolated field before normalisation
-  int feature_vertices = 0;      ///< boundary vertices classed as features this iteration
-  double seconds = 0;            ///< wall time of the iteration
+  double alignment = 0;       ///< area fraction of boundary triangles whose normal is within 15° of its closest axis
+  int inverted_tets = 0;      ///< tets with non-positive signed volume
+  double distortion = 0;      ///< mean conformal distortion ||F||_F ||F^-1||_F / 3 (1 = similarity) of the non-inverted
+                              ///< tets, F relative to the run's input
+  double distortion_max = 0;  ///< max of the same
+  double volume_ratio = 0;    ///< total signed volume / input volume
+  double min_quaternion_norm = 0;  ///< smallest |q| of the interpolated field before normalisation
+  int feature_vertices = 0;        ///< boundary vertices classed as features this iteration
+  double seconds = 0;              ///< wall time of the iteration
 };
 
 /// Output of rotation_deform.
 struct RotationDeformResult {
-  TetMesh mesh;                              ///< deformed mesh: input connectivity and source, new positions
+  TetMesh mesh;                                    ///< deformed mesh: input connectivity and source, new positions
   std::vector<RotationIterationStats> iterations;  ///< one entry per iteration
-  double input_alignment = 0;                ///< alignment of the input mesh
-  FactorizationStats factor_stats;           ///< both systems together
-  double assemble_seconds = 0;               ///< topology (boundary, edges), matrices
+  double input_alignment = 0;                      ///< alignment of the input mesh
+  FactorizationStats factor_stats;                 ///< both systems together
+  double assemble_seconds = 0;                     ///< topology (boundary, edges), matrices
   int boundary_vertices = 0;
   int boundary_faces = 0;
-  int components = 0;                        ///< connected components = pinned vertices
+  int components = 0;  ///< connected components = pinned vertices
 };
 
 /// Called after every iteration k (1-based) with the deformed mesh and its figures.

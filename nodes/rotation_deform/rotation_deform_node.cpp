@@ -1,9 +1,10 @@
 /// @file rotation_deform_node.cpp
 /// @brief Binding of `rotation_deform/quaternion_laplace`: TetMesh -> deformed TetMesh (paper §4).
-#include <chrono>
+#include "nodes/rotation_deform/rotation_deform.h"
 
 #include "graph/node.h"
-#include "nodes/rotation_deform/rotation_deform.h"
+
+#include <chrono>
 
 namespace polyhex {
 namespace {
@@ -14,91 +15,97 @@ using P = RotationDeformParams;
 const std::vector<std::pair<SolveMode, std::string>> kSolveModes = {{SolveMode::MultiColumn, "multi_column"},
                                                                     {SolveMode::Parallel, "parallel"}};
 
-const bool registered = register_node(make_node<P>(
-    "rotation_deform/quaternion_laplace",
-    "Rotation-driven deformation (§4): quaternion Laplace field from axis-aligning boundary rotations, "
-    "integrated by Eq. 1, iterated; both systems factored once",
-    ParamSet<P>()
-        .add("iterations", &P::iterations, "rotation-driven iterations (paper: 5)", 1, 50)
-        .add("anchor_weight", &P::anchor_weight, "weight w of the soft boundary anchors (paper: 1), (0, 1e6]", 1e-12,
-             1e6)
-        .add("feature_angle", &P::feature_angle,
-             "degrees: a boundary vertex whose incident face normals differ by more is a feature (not a constraint)", 0,
-             180)
-        .add("flatten", &P::flatten,
-             "fraction of a same-axis surface edge's component along its axis removed in Eq. 1's target "
-             "(0 = the paper's Eq. 1), [0, 1]",
-             0, 1)
-        .add("flatten_full_angle", &P::flatten_full_angle,
-             "degrees: a surface edge whose end normals lie within this of their axis is flattened by the full β", 0, 90)
-        .add("flatten_max_angle", &P::flatten_max_angle,
-             "degrees: no flattening where an end normal deviates more (linear in between), > flatten_full_angle", 0,
-             90)
-        .add_enum("solve_mode", &P::solve_mode, kSolveModes,
-                    "several right-hand sides: one multi-column solve or TBB-parallel columns")
-        .add("save_iterations", &P::save_iterations, "write each iteration's mesh as <out>/<id>.iter<k>.vtk"),
-    {{"tets", artefact_name<TetMesh>()}}, artefact_name<TetMesh>(),
-    [](const P& p, const Inputs& in, NodeContext& ctx) {
-      const auto t0 = std::chrono::steady_clock::now();
-      IterationCallback on_iteration = [&ctx, &p](int k, const TetMesh&, const RotationIterationStats&) {
-        ctx.progress(double(k) / p.iterations, "iteration " + std::to_string(k));
-      };
-      if (p.save_iterations || ctx.save_all) {
-        auto [ext, saver] = Registry::instance().saver(artefact_name<TetMesh>());
-        if (!saver && p.save_iterations)
-          throw ConfigError("rotation_deform: save_iterations needs a TetMesh writer, and none is registered "
-                            "(the io nodes register it)");
-        if (!saver) {
-          ctx.warn("no TetMesh writer registered: iterations not saved");
-        } else {
-          on_iteration = [&ctx, &p, ext = ext, saver = saver](int k, const TetMesh& m, const RotationIterationStats&) {
+const bool registered = register_node(
+    make_node<P>(
+        "rotation_deform/quaternion_laplace",
+        "Rotation-driven deformation (§4): quaternion Laplace field from axis-aligning boundary rotations, "
+        "integrated by Eq. 1, iterated; both systems factored once",
+        ParamSet<P>()
+            .add("iterations", &P::iterations, "rotation-driven iterations (paper: 5)", 1, 50)
+            .add("anchor_weight", &P::anchor_weight, "weight w of the soft boundary anchors (paper: 1), (0, 1e6]",
+                 1e-12, 1e6)
+            .add(
+                "feature_angle", &P::feature_angle,
+                "degrees: a boundary vertex whose incident face normals differ by more is a feature (not a constraint)",
+                0, 180)
+            .add("flatten", &P::flatten,
+                 "fraction of a same-axis surface edge's component along its axis removed in Eq. 1's target "
+                 "(0 = the paper's Eq. 1), [0, 1]",
+                 0, 1)
+            .add("flatten_full_angle", &P::flatten_full_angle,
+                 "degrees: a surface edge whose end normals lie within this of their axis is flattened by the full β",
+                 0, 90)
+            .add("flatten_max_angle", &P::flatten_max_angle,
+                 "degrees: no flattening where an end normal deviates more (linear in between), > flatten_full_angle",
+                 0, 90)
+            .add_enum("solve_mode", &P::solve_mode, kSolveModes,
+                      "several right-hand sides: one multi-column solve or TBB-parallel columns")
+            .add("save_iterations", &P::save_iterations, "write each iteration's mesh as <out>/<id>.iter<k>.vtk"),
+        {{"tets", artefact_name<TetMesh>()}}, artefact_name<TetMesh>(),
+        [](const P& p, const Inputs& in, NodeContext& ctx) {
+          const auto t0 = std::chrono::steady_clock::now();
+          IterationCallback on_iteration = [&ctx, &p](int k, const TetMesh&, const RotationIterationStats&) {
             ctx.progress(double(k) / p.iterations, "iteration " + std::to_string(k));
-            TetMesh shown = m;
-            shown.V = ctx.in_input_frame(m.V);
-            saver(make_artefact(std::move(shown)), ctx.out_dir / (ctx.id + ".iter" + std::to_string(k) + ext));
           };
-        }
-      }
-      RotationDeformResult r = rotation_deform(*in.get<TetMesh>(0), p, on_iteration);
+          if (p.save_iterations || ctx.save_all) {
+            auto [ext, saver] = Registry::instance().saver(artefact_name<TetMesh>());
+            if (!saver && p.save_iterations)
+              throw ConfigError(
+                  "rotation_deform: save_iterations needs a TetMesh writer, and none is registered "
+                  "(the io nodes register it)");
+            if (!saver) {
+              ctx.warn("no TetMesh writer registered: iterations not saved");
+            } else {
+              on_iteration = [&ctx, &p, ext = ext, saver = saver](int k, const TetMesh& m,
+                                                                  const RotationIterationStats&) {
+                ctx.progress(double(k) / p.iterations, "iteration " + std::to_string(k));
+                TetMesh shown = m;
+                shown.V = ctx.in_input_frame(m.V);
+                saver(make_artefact(std::move(shown)), ctx.out_dir / (ctx.id + ".iter" + std::to_string(k) + ext));
+              };
+            }
+          }
+          RotationDeformResult r = rotation_deform(*in.get<TetMesh>(0), p, on_iteration);
 
-      auto& m = ctx.metrics;
-      m["iterations"] = static_cast<int>(r.iterations.size());
-      r.factor_stats.merge_into(m);  // factorizations, solves, factor_seconds, solve_seconds, analyses, ...
-      m["assemble_seconds"] = r.assemble_seconds;
-      for (const auto& [mode, name] : kSolveModes)
-        if (mode == p.solve_mode) m["solve_mode"] = name;
-      m["alignment_input"] = r.input_alignment;
-      json alignment = json::array(), inverted = json::array(), distortion = json::array(),
-           distortion_max = json::array(), volume = json::array(), qmin = json::array(), features = json::array(),
-           seconds = json::array();
-      for (const auto& s : r.iterations) {
-        alignment.push_back(s.alignment);
-        inverted.push_back(s.inverted_tets);
-        distortion.push_back(s.distortion);
-        distortion_max.push_back(s.distortion_max);
-        volume.push_back(s.volume_ratio);
-        qmin.push_back(s.min_quaternion_norm);
-        features.push_back(s.feature_vertices);
-        seconds.push_back(s.seconds);
-      }
-      m["alignment"] = alignment;
-      m["inverted_tets"] = inverted;
-      m["distortion"] = distortion;  // mean conformal distortion ||F|| ||F^-1|| / 3 of the tets vs the input
-      m["distortion_max"] = distortion_max;
-      m["volume_ratio"] = volume;
-      m["min_quaternion_norm"] = qmin;
-      m["feature_vertices"] = features;
-      m["iteration_seconds"] = seconds;
-      m["tets"] = r.mesh.T.rows();
-      m["vertices"] = r.mesh.V.rows();
-      m["boundary_vertices"] = r.boundary_vertices;
-      m["components"] = r.components;
-      const double fs = r.factor_stats.factor_seconds + r.factor_stats.solve_seconds;
-      const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      m["compute_seconds"] = total;
-      m["factor_solve_fraction"] = total > 0 ? fs / total : 0.0;  // (factor + solve) / compute time
-      return make_artefact(std::move(r.mesh));
-    }).with_version("3"));
+          auto& m = ctx.metrics;
+          m["iterations"] = static_cast<int>(r.iterations.size());
+          r.factor_stats.merge_into(m);  // factorizations, solves, factor_seconds, solve_seconds, analyses, ...
+          m["assemble_seconds"] = r.assemble_seconds;
+          for (const auto& [mode, name] : kSolveModes)
+            if (mode == p.solve_mode) m["solve_mode"] = name;
+          m["alignment_input"] = r.input_alignment;
+          json alignment = json::array(), inverted = json::array(), distortion = json::array(),
+               distortion_max = json::array(), volume = json::array(), qmin = json::array(), features = json::array(),
+               seconds = json::array();
+          for (const auto& s : r.iterations) {
+            alignment.push_back(s.alignment);
+            inverted.push_back(s.inverted_tets);
+            distortion.push_back(s.distortion);
+            distortion_max.push_back(s.distortion_max);
+            volume.push_back(s.volume_ratio);
+            qmin.push_back(s.min_quaternion_norm);
+            features.push_back(s.feature_vertices);
+            seconds.push_back(s.seconds);
+          }
+          m["alignment"] = alignment;
+          m["inverted_tets"] = inverted;
+          m["distortion"] = distortion;  // mean conformal distortion ||F|| ||F^-1|| / 3 of the tets vs the input
+          m["distortion_max"] = distortion_max;
+          m["volume_ratio"] = volume;
+          m["min_quaternion_norm"] = qmin;
+          m["feature_vertices"] = features;
+          m["iteration_seconds"] = seconds;
+          m["tets"] = r.mesh.T.rows();
+          m["vertices"] = r.mesh.V.rows();
+          m["boundary_vertices"] = r.boundary_vertices;
+          m["components"] = r.components;
+          const double fs = r.factor_stats.factor_seconds + r.factor_stats.solve_seconds;
+          const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          m["compute_seconds"] = total;
+          m["factor_solve_fraction"] = total > 0 ? fs / total : 0.0;  // (factor + solve) / compute time
+          return make_artefact(std::move(r.mesh));
+        })
+        .with_version("3"));
 
 }  // namespace
 }  // namespace polyhex

@@ -2,23 +2,23 @@
 /// @brief TetGen 1.5 wrapper: flags, a crash-free driver, error translation, orientation, stats.
 #include "nodes/tetrahedralize/tetgen.h"
 
-#include <tetgen.h>
+#include "nodes/algorithms/reference_length.h"
+#include "nodes/formats/surface_io.h"
+#include "runtime/errors.h"
 
 #include <Eigen/Geometry>
+#include <tetgen.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <ctime>
 #include <mutex>
-#include <cstring>
 #include <sstream>
 #include <unistd.h>
 #include <unordered_map>
 #include <vector>
-
-#include "nodes/algorithms/reference_length.h"
-#include "nodes/formats/surface_io.h"
-#include "runtime/errors.h"
 
 namespace polyhex {
 namespace {
@@ -27,7 +27,7 @@ using Vec3 = Eigen::Vector3d;
 
 constexpr double kVolumeFactor = 1.5;
 constexpr double kTetsPerRegularVolume = 1.5;  // tets per volume of a regular tet of edge h (measured)
-constexpr double kGrid = 68719476736.0;  // 2^36: normalized coordinates are rounded to multiples of 1 / kGrid
+constexpr double kGrid = 68719476736.0;        // 2^36: normalized coordinates are rounded to multiples of 1 / kGrid
 
 std::string name_of(const SurfaceMesh& s) { return s.source.empty() ? std::string("surface") : s.source; }
 
@@ -85,8 +85,7 @@ void check_size(const TetEstimate& e, const TetgenParams& p, const std::string& 
   throw InvalidInput(who + ": refused: edge_length " + short_number(p.edge_length) + " (h = " + short_number(e.h) +
                      ") would give about " + short_number(e.tets) + " tets (enclosed volume " + short_number(e.volume) +
                      " / " + short_number(e.volume / e.tets) + " per tet), " + why +
-                     "; use edge_length >= " + short_number(min_edge * 1.01) +
-                     " or raise max_tets");
+                     "; use edge_length >= " + short_number(min_edge * 1.01) + " or raise max_tets");
 }
 
 /// A coordinate transform x -> (x - centre) / scale that puts the bounding box centre at the origin
@@ -126,12 +125,22 @@ std::uint64_t edge_key(int a, int b) {
 std::string tetgen_error(int code, const std::string& who) {
   const std::string c = " (TetGen code " + std::to_string(code) + ")";
   switch (code) {
-    case 1: return who + ": TetGen ran out of memory" + c + "; use a larger edge_length";
-    case 2: return who + ": TetGen hit an internal error" + c + "; the surface is probably degenerate or nearly self-intersecting";
-    case 3: return who + ": the surface intersects itself" + c + "; repair it before meshing";
-    case 4: return who + ": the surface has a feature smaller than TetGen's tolerance (a vertex almost on a facet or two almost coincident vertices)" + c + "; remove tiny features before meshing";
-    case 5: return who + ": two facets of the surface nearly touch or overlap" + c + "; repair it before meshing";
-    default: return who + ": TetGen failed" + c;
+    case 1:
+      return who + ": TetGen ran out of memory" + c + "; use a larger edge_length";
+    case 2:
+      return who + ": TetGen hit an internal error" + c +
+             "; the surface is probably degenerate or nearly self-intersecting";
+    case 3:
+      return who + ": the surface intersects itself" + c + "; repair it before meshing";
+    case 4:
+      return who +
+             ": the surface has a feature smaller than TetGen's tolerance (a vertex almost on a facet or two almost "
+             "coincident vertices)" +
+             c + "; remove tiny features before meshing";
+    case 5:
+      return who + ": two facets of the surface nearly touch or overlap" + c + "; repair it before meshing";
+    default:
+      return who + ": TetGen failed" + c;
   }
 }
 
@@ -163,15 +172,17 @@ void run_tetgen(tetgenbehavior& b, tetgenio& in, tetgenio& out) {
     clock_t tick = 0;  // TetGen's step timers, unused
     m->incrementaldelaunay(tick);
     m->meshsurface();
-    if (b.nobisect) m->recoverboundary(tick);   // -Y: recover the input facets without splitting them
-    else m->constraineddelaunay(tick);
-    m->carveholes();                            // remove the tets outside the surface
+    if (b.nobisect)
+      m->recoverboundary(tick);  // -Y: recover the input facets without splitting them
+    else
+      m->constraineddelaunay(tick);
+    m->carveholes();  // remove the tets outside the surface
     if (b.nobisect) {
       if (m->subvertstack->objects > 0) m->suppresssteinerpoints();
       m->recoverdelaunay();
     }
-    if (b.quality) m->delaunayrefinement();     // -q and -a
-    if (b.optlevel > 0) m->optimizemesh();      // default -O2/7: flips and smoothing
+    if (b.quality) m->delaunayrefinement();  // -q and -a
+    if (b.optlevel > 0) m->optimizemesh();   // default -O2/7: flips and smoothing
     if (!b.nojettison && (m->dupverts > 0 || m->unuverts > 0)) m->jettisonnodes();
     out.firstnumber = in.firstnumber;
     out.mesh_dim = in.mesh_dim;
@@ -184,7 +195,9 @@ void run_tetgen(tetgenbehavior& b, tetgenio& in, tetgenio& out) {
   delete m;
 }
 
-double tet_volume6(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) { return (b - a).cross(c - a).dot(d - a); }
+double tet_volume6(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  return (b - a).cross(c - a).dot(d - a);
+}
 
 }  // namespace
 
@@ -271,7 +284,7 @@ TetMesh tetrahedralize(const SurfaceMesh& surface, const TetgenParams& p, Tetgen
   const TetEstimate estimate = estimate_tets(surface, p.edge_length);
   check_size(estimate, p, who);
   const Normalization norm(surface.V);
-  const double h = estimate.h;               // absolute target edge
+  const double h = estimate.h;                                                     // absolute target edge
   const double h_unit = p.edge_length * (estimate.reference_length / norm.scale);  // in normalized coordinates
 
   // Normalized coordinates, rounded to multiples of 2^-36 (1.5e-11 of the diagonal): a model scaled by
@@ -339,8 +352,10 @@ TetMesh tetrahedralize(const SurfaceMesh& surface, const TetgenParams& p, Tetgen
     if (remap[i] < 0) continue;
     const double* q = out.pointlist + 3 * i;
     auto it = input_point.find(bits_of(q));
-    if (it != input_point.end()) m.V.row(remap[i]) = surface.V.row(it->second);
-    else m.V.row(remap[i]) = Eigen::RowVector3d(q[0], q[1], q[2]) * norm.scale + norm.centre;
+    if (it != input_point.end())
+      m.V.row(remap[i]) = surface.V.row(it->second);
+    else
+      m.V.row(remap[i]) = Eigen::RowVector3d(q[0], q[1], q[2]) * norm.scale + norm.centre;
   }
   for (Eigen::Index t = 0; t < m.T.rows(); ++t) {
     Vec3 a = m.V.row(m.T(t, 0)), b = m.V.row(m.T(t, 1)), c = m.V.row(m.T(t, 2)), d = m.V.row(m.T(t, 3));

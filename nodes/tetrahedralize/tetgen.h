@@ -8,7 +8,8 @@
 namespace polyhex {
 
 struct TetgenParams {
-  double edge_length = 0.02;   ///< target tet edge length, fraction of the input's reference length (nodes/algorithms/reference_length.h)
+  double edge_length =
+      0.02;  ///< target tet edge length, fraction of the input's reference length (nodes/algorithms/reference_length.h)
   double radius_edge = 1.5;    ///< quality bound on circumradius / shortest edge (TetGen -q<ratio>)
   double min_dihedral = 10.0;  ///< dihedral angle bound in degrees (TetGen -q<ratio>/<angle>)
   bool refine_surface = true;  ///< false keeps the input surface triangles untouched (TetGen -Y)
@@ -17,11 +18,11 @@ struct TetgenParams {
 
 /// The size of a tet mesh before it is made, to refuse requests far beyond the machine.
 struct TetEstimate {
-  double volume = 0;       ///< volume enclosed by the surface (|signed volume|)
+  double volume = 0;            ///< volume enclosed by the surface (|signed volume|)
   double reference_length = 0;  ///< the surface's reference length (nodes/algorithms/reference_length.h)
-  double h = 0;            ///< absolute target edge: edge_length x reference length
-  double tets = 0;         ///< estimated tet count: 1.5 x volume / volume of a regular tet of edge h
-  double bytes = 0;        ///< estimated peak memory of the TetGen run: tets x kTetgenBytesPerTet
+  double h = 0;                 ///< absolute target edge: edge_length x reference length
+  double tets = 0;              ///< estimated tet count: 1.5 x volume / volume of a regular tet of edge h
+  double bytes = 0;             ///< estimated peak memory of the TetGen run: tets x kTetgenBytesPerTet
 };
 
 /// Peak memory of a TetGen run per output tet, rounded up from a measurement (1.5M tets of a box:
@@ -32,25 +33,24 @@ constexpr double kTetgenBytesPerTet = 250.0;
 struct TetgenStats {
   long tets = 0;
   long vertices = 0;
-  double target_edge = 0;        ///< h, absolute target edge length (edge_length x reference length)
-  double edge_min = 0;           ///< shortest edge / h
-  double edge_max = 0;           ///< longest edge / h
-  double edge_mean = 0;          ///< mean edge / h (each edge counted once)
-  double min_dihedral_deg = 0;   ///< smallest dihedral angle over all tets, degrees
-  double max_radius_edge = 0;    ///< largest circumradius / shortest edge over all tets
-  double seconds = 0;            ///< wall time of the whole call
-  double estimated_tets = 0;     ///< estimate_tets(...).tets made before the run (the count TetGen gives is
-                                 ///< 0.9-1.2 times this on a box, up to 3.5 times on surfaces finer than h)
+  double target_edge = 0;       ///< h, absolute target edge length (edge_length x reference length)
+  double edge_min = 0;          ///< shortest edge / h
+  double edge_max = 0;          ///< longest edge / h
+  double edge_mean = 0;         ///< mean edge / h (each edge counted once)
+  double min_dihedral_deg = 0;  ///< smallest dihedral angle over all tets, degrees
+  double max_radius_edge = 0;   ///< largest circumradius / shortest edge over all tets
+  double seconds = 0;           ///< wall time of the whole call
+  double estimated_tets = 0;    ///< estimate_tets(...).tets made before the run (the count TetGen gives is
+                                ///< 0.9-1.2 times this on a box, up to 3.5 times on surfaces finer than h)
 };
 
 /// Tetrahedralizes the solid bounded by a closed surface with TetGen (flags `pq<ratio>/<angle>a<vol>zQ`,
 /// plus `Y` when refine_surface is false). h = edge_length x the surface's reference length
-/// (its tightest bounding-box diagonal over all orientations, so that a turned copy gets the same tets); the volume bound is 1.5
-/// times that of a regular tet of edge h (1.5 x 0.118 h^3), which puts the mean interior edge at
-/// about h. Long thin input triangles (coarse CAD tessellations) are split by TetGen's own boundary
-/// refinement (-q without -Y), which gives isotropic tets there; with refine_surface = false they are
-/// kept and the tets along them are as thin as they are. Near a surface finer than h the tets follow
-/// the surface size (TetGen grades from the boundary inwards).
+/// (its tightest bounding-box diagonal over all orientations, so that a turned copy gets the same tets); the volume
+/// bound is 1.5 times that of a regular tet of edge h (1.5 x 0.118 h^3), which puts the mean interior edge at about h.
+/// Long thin input triangles (coarse CAD tessellations) are split by TetGen's own boundary refinement (-q without -Y),
+/// which gives isotropic tets there; with refine_surface = false they are kept and the tets along them are as thin as
+/// they are. Near a surface finer than h the tets follow the surface size (TetGen grades from the boundary inwards).
 /// TetGen runs are serialised (its geometric predicates keep input-dependent global state).
 /// Nothing is printed (TetGen's -Q). Debian's TetGen keeps its internal assert()s: an input that
 /// trips one aborts the process, which no wrapper in-process can catch (not seen with these flags

@@ -6,34 +6,40 @@
 namespace polyhex {
 namespace {
 
-const bool registered = register_node(make_node<TetgenParams>(
-    "tetrahedralize/tetgen", "TetGen isotropic tet mesh of a closed surface",
-    ParamSet<TetgenParams>()
-        .add("edge_length", &TetgenParams::edge_length, "target tet edge, fraction of the reference length (the tightest bounding-box diagonal over all orientations)", 0.002, 0.5)
-        .add("radius_edge", &TetgenParams::radius_edge, "bound on circumradius / shortest edge (TetGen -q)", 1.1, 10.0)
-        .add("min_dihedral", &TetgenParams::min_dihedral, "dihedral angle bound in degrees (TetGen -q ratio/angle)", 0.0,
-             18.0)
-        .add("refine_surface", &TetgenParams::refine_surface,
-             "let TetGen refine the surface triangles (false: keep them as they are, -Y)")
-        .add("max_tets", &TetgenParams::max_tets,
-             "refuse up front when the estimated tet count (enclosed volume / regular tet of edge h) exceeds this",
-             1000, 2000000000),
-    {{"surface", artefact_name<SurfaceMesh>()}}, artefact_name<TetMesh>(),
-    [](const TetgenParams& p, const Inputs& in, NodeContext& ctx) {
-      TetgenStats s;
-      auto mesh = tetrahedralize(*in.get<SurfaceMesh>(0), p, &s);
-      ctx.metrics["tets"] = s.tets;
-      ctx.metrics["estimated_tets"] = s.estimated_tets;
-      ctx.metrics["vertices"] = s.vertices;
-      ctx.metrics["target_edge"] = s.target_edge;
-      ctx.metrics["edge_min_rel"] = s.edge_min;
-      ctx.metrics["edge_max_rel"] = s.edge_max;
-      ctx.metrics["edge_mean_rel"] = s.edge_mean;
-      ctx.metrics["min_dihedral_deg"] = s.min_dihedral_deg;
-      ctx.metrics["max_radius_edge"] = s.max_radius_edge;
-      ctx.metrics["seconds"] = s.seconds;
-      return make_artefact(std::move(mesh));
-    }).with_version("2"));  // 2: normalized coordinates for TetGen, max_tets
+const bool registered = register_node(
+    make_node<TetgenParams>(
+        "tetrahedralize/tetgen", "TetGen isotropic tet mesh of a closed surface",
+        ParamSet<TetgenParams>()
+            .add("edge_length", &TetgenParams::edge_length,
+                 "target tet edge, fraction of the reference length (the tightest bounding-box diagonal over all "
+                 "orientations)",
+                 0.002, 0.5)
+            .add("radius_edge", &TetgenParams::radius_edge, "bound on circumradius / shortest edge (TetGen -q)", 1.1,
+                 10.0)
+            .add("min_dihedral", &TetgenParams::min_dihedral, "dihedral angle bound in degrees (TetGen -q ratio/angle)",
+                 0.0, 18.0)
+            .add("refine_surface", &TetgenParams::refine_surface,
+                 "let TetGen refine the surface triangles (false: keep them as they are, -Y)")
+            .add("max_tets", &TetgenParams::max_tets,
+                 "refuse up front when the estimated tet count (enclosed volume / regular tet of edge h) exceeds this",
+                 1000, 2000000000),
+        {{"surface", artefact_name<SurfaceMesh>()}}, artefact_name<TetMesh>(),
+        [](const TetgenParams& p, const Inputs& in, NodeContext& ctx) {
+          TetgenStats s;
+          auto mesh = tetrahedralize(*in.get<SurfaceMesh>(0), p, &s);
+          ctx.metrics["tets"] = s.tets;
+          ctx.metrics["estimated_tets"] = s.estimated_tets;
+          ctx.metrics["vertices"] = s.vertices;
+          ctx.metrics["target_edge"] = s.target_edge;
+          ctx.metrics["edge_min_rel"] = s.edge_min;
+          ctx.metrics["edge_max_rel"] = s.edge_max;
+          ctx.metrics["edge_mean_rel"] = s.edge_mean;
+          ctx.metrics["min_dihedral_deg"] = s.min_dihedral_deg;
+          ctx.metrics["max_radius_edge"] = s.max_radius_edge;
+          ctx.metrics["seconds"] = s.seconds;
+          return make_artefact(std::move(mesh));
+        })
+        .with_version("2"));  // 2: normalized coordinates for TetGen, max_tets
 
 }  // namespace
 }  // namespace polyhex

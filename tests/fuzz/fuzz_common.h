@@ -8,7 +8,9 @@
 /// is the file content. tools/fuzz.sh builds the seed corpus in this layout from tests/fixtures.
 #pragma once
 
-#include <unistd.h>
+#include "nodes/formats/hexmesh_io.h"
+#include "nodes/formats/surface_io.h"
+#include "nodes/formats/tetmesh_io.h"
 
 #include <cstddef>
 #include <cstdint>
@@ -18,11 +20,8 @@
 #include <fstream>
 #include <string>
 #include <string_view>
+#include <unistd.h>
 #include <utility>
-
-#include "nodes/formats/hexmesh_io.h"
-#include "nodes/formats/surface_io.h"
-#include "nodes/formats/tetmesh_io.h"
 
 namespace polyhex_fuzz {
 
@@ -30,7 +29,7 @@ namespace polyhex_fuzz {
 inline const std::filesystem::path& scratch_dir() {
   static const std::filesystem::path dir = [] {
     std::filesystem::path base = std::filesystem::exists("/dev/shm") ? std::filesystem::path("/dev/shm")
-                                                                      : std::filesystem::temp_directory_path();
+                                                                     : std::filesystem::temp_directory_path();
     std::filesystem::path d = base / ("polyhex_fuzz_" + std::to_string(::getpid()));
     std::filesystem::create_directories(d);
     return d;

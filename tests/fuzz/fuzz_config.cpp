@@ -2,14 +2,14 @@
 // substitution), parse_config, Pipeline::build (node types, params, ports, cycles). The registry holds
 // the reader/writer and shape nodes linked into this target plus `fuzz/params`, a node with one param
 // of every kind and two ports, so params and port checks are reached with every type.
-#include <cstddef>
-#include <cstdint>
-
 #include "graph/config.h"
 #include "graph/node.h"
 #include "graph/pipeline.h"
 #include "runtime/errors.h"
 #include "tests/fuzz/fuzz_common.h"
+
+#include <cstddef>
+#include <cstdint>
 
 namespace {
 
@@ -39,8 +39,8 @@ const bool registered = polyhex::register_node(polyhex::make_node<FuzzParams>(
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  const auto path = polyhex_fuzz::write_scratch(
-      "config.json", std::string_view(reinterpret_cast<const char*>(data), size));
+  const auto path =
+      polyhex_fuzz::write_scratch("config.json", std::string_view(reinterpret_cast<const char*>(data), size));
   try {
     polyhex::json j = polyhex::load_config_json(path, {{"input", "in.off"}});
     polyhex::PipelineConfig cfg = polyhex::parse_config(j, path.string());

@@ -1,9 +1,9 @@
 // libFuzzer target: read_hexmesh on .vtk / .mesh / .msh (byte 0 % 3 picks the extension).
-#include <cstddef>
-#include <cstdint>
-
 #include "runtime/errors.h"
 #include "tests/fuzz/fuzz_common.h"
+
+#include <cstddef>
+#include <cstdint>
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {

@@ -1,10 +1,10 @@
 // libFuzzer target: read_tetmesh on .mesh / .vtk / .msh / TetGen .node+.ele (byte 0 % 4 picks the
 // format; for TetGen the content is split at the first NUL byte: .node before it, .ele after it).
-#include <cstddef>
-#include <cstdint>
-
 #include "runtime/errors.h"
 #include "tests/fuzz/fuzz_common.h"
+
+#include <cstddef>
+#include <cstdint>
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {

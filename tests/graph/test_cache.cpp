@@ -1,23 +1,22 @@
 // The artefact cache inside Pipeline::run: keys, hits and misses, downstream-only recompute, input
 // files, bad entries (corrupt, truncated, old version) recovered with a warning, LRU prune, stats,
 // and the variant swap that reuses every upstream node.
-#include <catch2/catch.hpp>
+#include "graph/cache.h"
+#include "graph/config.h"
+#include "graph/pipeline.h"
+#include "nodes/algorithms/shapes.h"
+#include "nodes/artefacts/serialize.h"
+#include "nodes/formats/surface_io.h"
+#include "tests/helpers/cli.h"
 
-#include <unistd.h>
+#include <catch2/catch.hpp>
 
 #include <atomic>
 #include <cstring>
 #include <fstream>
 #include <functional>
 #include <thread>
-
-#include "graph/cache.h"
-#include "graph/config.h"
-#include "graph/pipeline.h"
-#include "nodes/artefacts/serialize.h"
-#include "nodes/formats/surface_io.h"
-#include "nodes/algorithms/shapes.h"
-#include "tests/helpers/cli.h"
+#include <unistd.h>
 
 using namespace polyhex;
 using Catch::Matchers::Contains;
@@ -45,8 +44,8 @@ namespace {
 std::atomic<int> g_src_calls{0}, g_scale_calls{0}, g_blob_calls{0}, g_sink_calls{0};
 
 struct SrcParams {
-  double size = 1.0;   ///< edge of the tetrahedron
-  std::string tag;     ///< unused, changes the key
+  double size = 1.0;  ///< edge of the tetrahedron
+  std::string tag;    ///< unused, changes the key
 };
 struct ScaleParams {
   double factor = 2.0;  ///< scale factor
@@ -75,31 +74,30 @@ const bool registered = [] {
         ctx.warn("source warning");
         return make_artefact(tetra(p.size));
       }));
-  register_node(make_node<ScaleParams>(
-      "test_cache_scale/default", "scales a surface",
-      ParamSet<ScaleParams>().add("factor", &ScaleParams::factor, "factor", 0.0, 100.0),
-      {{"surface", artefact_name<SurfaceMesh>()}}, artefact_name<SurfaceMesh>(),
-      [](const ScaleParams& p, const Inputs& in, NodeContext& ctx) {
-        ++g_scale_calls;
-        SurfaceMesh m = *in.get<SurfaceMesh>(0);
-        m.V *= p.factor;
-        ctx.metrics["max"] = m.V.maxCoeff();
-        return make_artefact(std::move(m));
-      }));
-  register_node(make_node<NoParams>(
-      "test_cache_blob/default", "an artefact without a codec", ParamSet<NoParams>(),
-      {{"surface", artefact_name<SurfaceMesh>()}}, artefact_name<CacheTestBlob>(),
-      [](const NoParams&, const Inputs& in, NodeContext&) {
-        ++g_blob_calls;
-        return make_artefact(CacheTestBlob{int(in.get<SurfaceMesh>(0)->V.rows())});
-      }));
-  register_node(make_node<NoParams>(
-      "test_cache_sink/default", "a sink", ParamSet<NoParams>(), {{"surface", artefact_name<SurfaceMesh>()}}, "",
-      [](const NoParams&, const Inputs& in, NodeContext& ctx) {
-        ++g_sink_calls;
-        ctx.metrics["max"] = in.get<SurfaceMesh>(0)->V.maxCoeff();
-        return Artefact{};
-      }));
+  register_node(
+      make_node<ScaleParams>("test_cache_scale/default", "scales a surface",
+                             ParamSet<ScaleParams>().add("factor", &ScaleParams::factor, "factor", 0.0, 100.0),
+                             {{"surface", artefact_name<SurfaceMesh>()}}, artefact_name<SurfaceMesh>(),
+                             [](const ScaleParams& p, const Inputs& in, NodeContext& ctx) {
+                               ++g_scale_calls;
+                               SurfaceMesh m = *in.get<SurfaceMesh>(0);
+                               m.V *= p.factor;
+                               ctx.metrics["max"] = m.V.maxCoeff();
+                               return make_artefact(std::move(m));
+                             }));
+  register_node(make_node<NoParams>("test_cache_blob/default", "an artefact without a codec", ParamSet<NoParams>(),
+                                    {{"surface", artefact_name<SurfaceMesh>()}}, artefact_name<CacheTestBlob>(),
+                                    [](const NoParams&, const Inputs& in, NodeContext&) {
+                                      ++g_blob_calls;
+                                      return make_artefact(CacheTestBlob{int(in.get<SurfaceMesh>(0)->V.rows())});
+                                    }));
+  register_node(make_node<NoParams>("test_cache_sink/default", "a sink", ParamSet<NoParams>(),
+                                    {{"surface", artefact_name<SurfaceMesh>()}}, "",
+                                    [](const NoParams&, const Inputs& in, NodeContext& ctx) {
+                                      ++g_sink_calls;
+                                      ctx.metrics["max"] = in.get<SurfaceMesh>(0)->V.maxCoeff();
+                                      return Artefact{};
+                                    }));
   return true;
 }();
 
@@ -108,7 +106,10 @@ Pipeline build(const json& nodes) { return Pipeline::build(parse_config(json{{"n
 json small_graph(double size, double factor) {
   return json::array({
       {{"id", "src"}, {"type", "test_cache_src"}, {"params", {{"size", size}}}},
-      {{"id", "scale"}, {"type", "test_cache_scale"}, {"params", {{"factor", factor}}}, {"inputs", {{"surface", "src"}}}},
+      {{"id", "scale"},
+       {"type", "test_cache_scale"},
+       {"params", {{"factor", factor}}},
+       {"inputs", {{"surface", "src"}}}},
       {{"id", "blob"}, {"type", "test_cache_blob"}, {"inputs", {{"surface", "scale"}}}},
       {{"id", "sink"}, {"type", "test_cache_sink"}, {"inputs", {{"surface", "scale"}}}},
   });
@@ -142,7 +143,10 @@ json read_file(const fs::path& path) {
 json box_chain(const json& surface, double tet_edge) {
   return json::array({
       surface,
-      {{"id", "tets"}, {"type", "tetrahedralize/tetgen"}, {"params", {{"edge_length", tet_edge}}}, {"inputs", {{"surface", "surface"}}}},
+      {{"id", "tets"},
+       {"type", "tetrahedralize/tetgen"},
+       {"params", {{"edge_length", tet_edge}}},
+       {"inputs", {{"surface", "surface"}}}},
       {{"id", "hex"}, {"type", "hex_from_tets/split"}, {"inputs", {{"tets", "tets"}}}},
       {{"id", "write"}, {"type", "write_hex"}, {"params", {{"path", "hex.vtk"}}}, {"inputs", {{"mesh", "hex"}}}},
   });
@@ -359,11 +363,19 @@ TEST_CASE("cache: corrupt, truncated and old-version entries are ignored with a 
     return s;
   };
   std::vector<Damage> damages = {
-      {"flipped payload byte", "checksum mismatch", [](std::string s) { s[s.size() / 2] ^= 0x5a; return s; }},
+      {"flipped payload byte", "checksum mismatch",
+       [](std::string s) {
+         s[s.size() / 2] ^= 0x5a;
+         return s;
+       }},
       {"truncated to half", "truncated", [](std::string s) { return s.substr(0, s.size() / 2); }},
       {"truncated to 5 bytes", "truncated (5 bytes)", [](std::string s) { return s.substr(0, 5); }},
       {"empty file", "truncated (0 bytes)", [](std::string) { return std::string(); }},
-      {"not an entry", "bad magic", [](std::string s) { s[0] = 'X'; return s; }},
+      {"not an entry", "bad magic",
+       [](std::string s) {
+         s[0] = 'X';
+         return s;
+       }},
       {"old entry format", "entry format version 0, expected 1", [&](std::string s) { return set_u32(s, 8, 0); }},
       {"old codec version", "TetMesh codec version 0, expected " + std::to_string(kCodecVersion),
        [&](std::string s) {
@@ -395,8 +407,7 @@ TEST_CASE("cache: corrupt, truncated and old-version entries are ignored with a 
   fs::remove_all(dir);
 }
 
-TEST_CASE("cache: stats count entries per node type; prune removes the least recently used; clear empties",
-          "[cache]") {
+TEST_CASE("cache: stats count entries per node type; prune removes the least recently used; clear empties", "[cache]") {
   fs::path dir = polyhex::test::fresh_dir("cache_prune");
   ArtefactCache cache(dir / "cache");
   CHECK(cache.stats().entries == 0);  // missing folder = empty
@@ -473,10 +484,21 @@ TEST_CASE("cache: swapping the hex stage variant reuses every upstream node", "[
   auto graph = [](const json& hex) {
     return json::array({
         small_box(),
-        {{"id", "tets"}, {"type", "tetrahedralize/tetgen"}, {"params", {{"edge_length", 0.15}}}, {"inputs", {{"surface", "surface"}}}},
-        {{"id", "rotate"}, {"type", "rotation_deform/quaternion_laplace"}, {"params", {{"iterations", 2}}}, {"inputs", {{"tets", "tets"}}}},
-        {{"id", "segment"}, {"type", "polycube_segment"}, {"params", {{"hex_edge_length", 0.2}}}, {"inputs", {{"deformed", "rotate"}}}},
-        {{"id", "polycube"}, {"type", "position_deform/chart_planes"}, {"params", {{"edge_length", 0.2}}},
+        {{"id", "tets"},
+         {"type", "tetrahedralize/tetgen"},
+         {"params", {{"edge_length", 0.15}}},
+         {"inputs", {{"surface", "surface"}}}},
+        {{"id", "rotate"},
+         {"type", "rotation_deform/quaternion_laplace"},
+         {"params", {{"iterations", 2}}},
+         {"inputs", {{"tets", "tets"}}}},
+        {{"id", "segment"},
+         {"type", "polycube_segment"},
+         {"params", {{"hex_edge_length", 0.2}}},
+         {"inputs", {{"deformed", "rotate"}}}},
+        {{"id", "polycube"},
+         {"type", "position_deform/chart_planes"},
+         {"params", {{"edge_length", 0.2}}},
          {"inputs", {{"tets", "tets"}, {"deformed", "rotate"}, {"segmentation", "segment"}}}},
         hex,
         {{"id", "quality"}, {"type", "quality"}, {"inputs", {{"mesh", "hex"}, {"surface", "surface"}}}},

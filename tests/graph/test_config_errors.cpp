@@ -1,15 +1,14 @@
 // Config errors on the real nodes (test_pipeline.cpp covers the same kinds on test-only nodes):
 // unknown variant, out-of-range and mistyped params of the meshing stages, bad --set values,
 // malformed JSON with its position, and a config whose ${input} is missing.
-#include <catch2/catch.hpp>
+#include "graph/config.h"
+#include "graph/pipeline.h"
 
-#include <unistd.h>
+#include <catch2/catch.hpp>
 
 #include <filesystem>
 #include <fstream>
-
-#include "graph/config.h"
-#include "graph/pipeline.h"
+#include <unistd.h>
 
 using namespace polyhex;
 using Catch::Matchers::Contains;
@@ -78,10 +77,10 @@ TEST_CASE("config errors on the real nodes name the node, the param and the vali
                         Contains("node `g`") && Contains("expects PolyCubeMap"));
   }
   SECTION("a surface where a tet mesh is expected") {
-    REQUIRE_THROWS_WITH(
-        build_real(R"({"nodes":[{"id":"surface","type":"read_surface","params":{"path":"shape:box"}},
+    REQUIRE_THROWS_WITH(build_real(R"({"nodes":[{"id":"surface","type":"read_surface","params":{"path":"shape:box"}},
                       {"id":"rotate","type":"rotation_deform/quaternion_laplace","inputs":["surface"]}]})"),
-        Contains("node `rotate`") && Contains("expects TetMesh but node `surface`") && Contains("produces SurfaceMesh"));
+                        Contains("node `rotate`") && Contains("expects TetMesh but node `surface`") &&
+                            Contains("produces SurfaceMesh"));
   }
 }
 

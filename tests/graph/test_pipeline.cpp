@@ -1,16 +1,15 @@
 // Graph builder and runtime: config validation errors, variable substitution, overrides, concurrent
 // execution, error propagation and report.json.
+#include "graph/config.h"
+#include "graph/pipeline.h"
+
 #include <catch2/catch.hpp>
 
 #include <atomic>
 #include <chrono>
 #include <fstream>
 #include <thread>
-
 #include <unistd.h>
-
-#include "graph/config.h"
-#include "graph/pipeline.h"
 
 using namespace polyhex;
 using Catch::Matchers::Contains;
@@ -18,8 +17,8 @@ using Catch::Matchers::Contains;
 namespace {
 
 struct SourceParams {
-  double size = 1.0;     ///< edge of the box
-  int copies = 1;        ///< unused count, to test integer params
+  double size = 1.0;  ///< edge of the box
+  int copies = 1;     ///< unused count, to test integer params
   bool flag = false;
   std::string mode = "a";
 };
@@ -38,58 +37,57 @@ SurfaceMesh box(double s) {
 
 // Test-only node types (prefixed test_), registered in the test binary only.
 const bool registered = [] {
-  register_node(make_node<SourceParams>(
-      "test_source/box", "a tetrahedron surface",
-      ParamSet<SourceParams>()
-          .add("size", &SourceParams::size, "edge", 0.0, 10.0)
-          .add("copies", &SourceParams::copies, "count", 1, 5)
-          .add("flag", &SourceParams::flag, "flag")
-          .add_choice("mode", &SourceParams::mode, {"a", "b"}, "mode"),
-      {}, artefact_name<SurfaceMesh>(),
-      [](const SourceParams& p, const Inputs&, NodeContext& ctx) {
-        ctx.metrics["size"] = p.size;
-        return make_artefact(box(p.size));
-      }));
+  register_node(make_node<SourceParams>("test_source/box", "a tetrahedron surface",
+                                        ParamSet<SourceParams>()
+                                            .add("size", &SourceParams::size, "edge", 0.0, 10.0)
+                                            .add("copies", &SourceParams::copies, "count", 1, 5)
+                                            .add("flag", &SourceParams::flag, "flag")
+                                            .add_choice("mode", &SourceParams::mode, {"a", "b"}, "mode"),
+                                        {}, artefact_name<SurfaceMesh>(),
+                                        [](const SourceParams& p, const Inputs&, NodeContext& ctx) {
+                                          ctx.metrics["size"] = p.size;
+                                          return make_artefact(box(p.size));
+                                        }));
   struct Empty {};
-  register_node(make_node<Empty>(
-      "test_scale/default", "doubles coordinates, waits for a concurrent sibling", ParamSet<Empty>(),
-      {{"surface", artefact_name<SurfaceMesh>()}}, artefact_name<SurfaceMesh>(),
-      [](const Empty&, const Inputs& in, NodeContext& ctx) {
-        int now = ++g_running;
-        int prev = g_max_running.load();
-        while (now > prev && !g_max_running.compare_exchange_weak(prev, now)) {
-        }
-        // give a sibling up to 3 s to start, so concurrency is observable
-        for (int k = 0; k < 300 && g_max_running.load() < 2; ++k) std::this_thread::sleep_for(std::chrono::milliseconds(10));
-        SurfaceMesh m = *in.get<SurfaceMesh>(0);
-        m.V *= 2.0;
-        --g_running;
-        return make_artefact(std::move(m));
-      }));
-  register_node(make_node<Empty>(
-      "test_merge/default", "counts vertices of two surfaces", ParamSet<Empty>(),
-      {{"a", artefact_name<SurfaceMesh>()}, {"b", artefact_name<SurfaceMesh>(), true}}, "",
-      [](const Empty&, const Inputs& in, NodeContext& ctx) {
-        ctx.metrics["vertices"] = in.get<SurfaceMesh>(0)->V.rows() + (in.has(1) ? in.get<SurfaceMesh>(1)->V.rows() : 0);
-        ctx.warn("merged");
-        return Artefact{};
-      }));
+  register_node(make_node<Empty>("test_scale/default", "doubles coordinates, waits for a concurrent sibling",
+                                 ParamSet<Empty>(), {{"surface", artefact_name<SurfaceMesh>()}},
+                                 artefact_name<SurfaceMesh>(), [](const Empty&, const Inputs& in, NodeContext& ctx) {
+                                   int now = ++g_running;
+                                   int prev = g_max_running.load();
+                                   while (now > prev && !g_max_running.compare_exchange_weak(prev, now)) {
+                                   }
+                                   // give a sibling up to 3 s to start, so concurrency is observable
+                                   for (int k = 0; k < 300 && g_max_running.load() < 2; ++k)
+                                     std::this_thread::sleep_for(std::chrono::milliseconds(10));
+                                   SurfaceMesh m = *in.get<SurfaceMesh>(0);
+                                   m.V *= 2.0;
+                                   --g_running;
+                                   return make_artefact(std::move(m));
+                                 }));
+  register_node(make_node<Empty>("test_merge/default", "counts vertices of two surfaces", ParamSet<Empty>(),
+                                 {{"a", artefact_name<SurfaceMesh>()}, {"b", artefact_name<SurfaceMesh>(), true}}, "",
+                                 [](const Empty&, const Inputs& in, NodeContext& ctx) {
+                                   ctx.metrics["vertices"] = in.get<SurfaceMesh>(0)->V.rows() +
+                                                             (in.has(1) ? in.get<SurfaceMesh>(1)->V.rows() : 0);
+                                   ctx.warn("merged");
+                                   return Artefact{};
+                                 }));
   struct Keep {
     double below = 1;
   };
-  register_node(make_node<Keep>(
-                    "test_keep/default", "passes a box on when its size is below `below`, else produces nothing",
-                    ParamSet<Keep>().add("below", &Keep::below, "size bound", 0.0, 10.0),
-                    {{"surface", artefact_name<SurfaceMesh>()}}, artefact_name<SurfaceMesh>(),
-                    [](const Keep& p, const Inputs& in, NodeContext&) {
-                      return in.get<SurfaceMesh>(0)->V.maxCoeff() < p.below ? in.items[0] : Artefact{};
-                    })
+  register_node(make_node<Keep>("test_keep/default",
+                                "passes a box on when its size is below `below`, else produces nothing",
+                                ParamSet<Keep>().add("below", &Keep::below, "size bound", 0.0, 10.0),
+                                {{"surface", artefact_name<SurfaceMesh>()}}, artefact_name<SurfaceMesh>(),
+                                [](const Keep& p, const Inputs& in, NodeContext&) {
+                                  return in.get<SurfaceMesh>(0)->V.maxCoeff() < p.below ? in.items[0] : Artefact{};
+                                })
                     .with_may_skip());
-  register_node(make_node<Empty>(
-      "test_fail/default", "always throws", ParamSet<Empty>(), {{"surface", artefact_name<SurfaceMesh>()}},
-      artefact_name<TetMesh>(), [](const Empty&, const Inputs&, NodeContext&) -> Artefact {
-        throw InvalidInput("the surface is not good enough");
-      }));
+  register_node(make_node<Empty>("test_fail/default", "always throws", ParamSet<Empty>(),
+                                 {{"surface", artefact_name<SurfaceMesh>()}}, artefact_name<TetMesh>(),
+                                 [](const Empty&, const Inputs&, NodeContext&) -> Artefact {
+                                   throw InvalidInput("the surface is not good enough");
+                                 }));
   return true;
 }();
 
@@ -107,8 +105,9 @@ std::filesystem::path temp_dir(const std::string& name) {
 TEST_CASE("config errors name the node and list valid choices", "[graph]") {
   REQUIRE_THROWS_WITH(build(R"({"nodes":[{"id":"s","type":"nope/x"}]})"),
                       Contains("node `s` (`nope/x`): unknown node type `nope/x`") && Contains("test_source/box"));
-  REQUIRE_THROWS_WITH(build(R"({"nodes":[{"id":"s","type":"test_source/box","params":{"sise":2}}]})"),
-                      Contains("node `s`") && Contains("unknown param `sise`") && Contains("valid params: size, copies, flag, mode"));
+  REQUIRE_THROWS_WITH(
+      build(R"({"nodes":[{"id":"s","type":"test_source/box","params":{"sise":2}}]})"),
+      Contains("node `s`") && Contains("unknown param `sise`") && Contains("valid params: size, copies, flag, mode"));
   REQUIRE_THROWS_WITH(build(R"({"nodes":[{"id":"s","type":"test_source/box","params":{"size":"big"}}]})"),
                       Contains("param `size` must be a number"));
   REQUIRE_THROWS_WITH(build(R"({"nodes":[{"id":"s","type":"test_source/box","params":{"copies":1.5}}]})"),
@@ -123,13 +122,17 @@ TEST_CASE("config errors name the node and list valid choices", "[graph]") {
                       Contains("node `m`") && Contains("required input `a` (SurfaceMesh) is not connected"));
   REQUIRE_THROWS_WITH(build(R"({"nodes":[{"id":"m","type":"test_merge","inputs":{"a":"ghost"}}]})"),
                       Contains("input `a` names unknown node `ghost`"));
-  REQUIRE_THROWS_WITH(build(R"({"nodes":[{"id":"s","type":"test_source/box"},{"id":"m","type":"test_merge","inputs":{"c":"s"}}]})"),
-                      Contains("unknown input port `c`; ports: a (SurfaceMesh), b (SurfaceMesh, optional)"));
-  REQUIRE_THROWS_WITH(build(R"({"nodes":[{"id":"s","type":"test_source/box"},{"id":"f","type":"test_fail","inputs":["s"]},
+  REQUIRE_THROWS_WITH(
+      build(R"({"nodes":[{"id":"s","type":"test_source/box"},{"id":"m","type":"test_merge","inputs":{"c":"s"}}]})"),
+      Contains("unknown input port `c`; ports: a (SurfaceMesh), b (SurfaceMesh, optional)"));
+  REQUIRE_THROWS_WITH(
+      build(R"({"nodes":[{"id":"s","type":"test_source/box"},{"id":"f","type":"test_fail","inputs":["s"]},
                                {"id":"m","type":"test_merge","inputs":{"a":"f"}}]})"),
-                      Contains("node `m`") && Contains("expects SurfaceMesh but node `f` (`test_fail/default`) produces TetMesh"));
-  REQUIRE_THROWS_WITH(build(R"({"nodes":[{"id":"a","type":"test_scale","inputs":["b"]},{"id":"b","type":"test_scale","inputs":["a"]}]})"),
-                      Contains("the inputs form a cycle"));
+      Contains("node `m`") && Contains("expects SurfaceMesh but node `f` (`test_fail/default`) produces TetMesh"));
+  REQUIRE_THROWS_WITH(
+      build(
+          R"({"nodes":[{"id":"a","type":"test_scale","inputs":["b"]},{"id":"b","type":"test_scale","inputs":["a"]}]})"),
+      Contains("the inputs form a cycle"));
   REQUIRE_THROWS_WITH(build(R"({"nodes":[{"id":"a","type":"test_source/box"},{"id":"a","type":"test_source/box"}]})"),
                       Contains("node `a`: duplicate id"));
   REQUIRE_THROWS_WITH(build(R"({"nodes":[{"id":"a","type":"test_source/box","param":{}}]})"),

@@ -2,8 +2,8 @@
 // capturing its exit code and output, temporary folders, reading a whole file. Header-only.
 #pragma once
 
+#include <catch2/catch.hpp>
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <array>
 #include <atomic>
@@ -15,8 +15,7 @@
 #include <iterator>
 #include <string>
 #include <system_error>
-
-#include <catch2/catch.hpp>
+#include <unistd.h>
 
 namespace polyhex::test {
 

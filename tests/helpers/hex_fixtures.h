@@ -3,12 +3,13 @@
 /// perturbations.
 #pragma once
 
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/artefacts/meshes.h"
+
 #include <Eigen/Geometry>
+
 #include <random>
 #include <string>
-
-#include "nodes/artefacts/meshes.h"
-#include "nodes/algorithms/hex_quality.h"
 
 namespace polyhex::test {
 

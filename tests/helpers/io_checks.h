@@ -1,14 +1,14 @@
 // Helpers of the mesh I/O tests: temporary folders, fixture paths, independent mesh checks.
 #pragma once
 
+#include "nodes/artefacts/meshes.h"
+#include "tests/helpers/cli.h"
+
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <string>
 #include <utility>
-
-#include "nodes/artefacts/meshes.h"
-#include "tests/helpers/cli.h"
 
 namespace polyhex::iotest {
 

@@ -37,9 +37,11 @@ inline Image decode_png(const std::string& png) {
     if (type == "IHDR") {
       img.width = int(be32(at + 8));
       img.height = int(be32(at + 12));
-      const int depth = std::uint8_t(png[at + 16]), colour = std::uint8_t(png[at + 17]), interlace = std::uint8_t(png[at + 20]);
+      const int depth = std::uint8_t(png[at + 16]), colour = std::uint8_t(png[at + 17]),
+                interlace = std::uint8_t(png[at + 20]);
       if (depth != 8 || (colour != 2 && colour != 6) || interlace != 0)
-        fail("only 8-bit RGB/RGBA non-interlaced (depth " + std::to_string(depth) + ", colour type " + std::to_string(colour) + ")");
+        fail("only 8-bit RGB/RGBA non-interlaced (depth " + std::to_string(depth) + ", colour type " +
+             std::to_string(colour) + ")");
       channels = colour == 2 ? 3 : 4;
     } else if (type == "IDAT") {
       idat.append(png, at + 8, len);
@@ -66,21 +68,32 @@ inline Image decode_png(const std::string& png) {
                 c = i >= size_t(channels) ? prev[i - size_t(channels)] : 0;
       int pred = 0;
       switch (filter) {
-        case 0: pred = 0; break;
-        case 1: pred = a; break;
-        case 2: pred = b; break;
-        case 3: pred = (a + b) / 2; break;
+        case 0:
+          pred = 0;
+          break;
+        case 1:
+          pred = a;
+          break;
+        case 2:
+          pred = b;
+          break;
+        case 3:
+          pred = (a + b) / 2;
+          break;
         case 4: {
           const int p = a + b - c, pa = std::abs(p - a), pb = std::abs(p - b), pc = std::abs(p - c);
           pred = pa <= pb && pa <= pc ? a : pb <= pc ? b : c;
           break;
         }
-        default: fail("bad filter " + std::to_string(filter));
+        default:
+          fail("bad filter " + std::to_string(filter));
       }
       cur[i] = std::uint8_t(row[1 + i] + pred);
     }
     for (int x = 0; x < img.width; ++x)
-      for (int k = 0; k < 3; ++k) img.rgb[(size_t(y) * size_t(img.width) + size_t(x)) * 3 + size_t(k)] = cur[size_t(x) * size_t(channels) + size_t(k)];
+      for (int k = 0; k < 3; ++k)
+        img.rgb[(size_t(y) * size_t(img.width) + size_t(x)) * 3 + size_t(k)] =
+            cur[size_t(x) * size_t(channels) + size_t(k)];
     std::swap(cur, prev);
   }
   return img;

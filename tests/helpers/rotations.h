@@ -1,11 +1,11 @@
 // Turned copies of test inputs: fixed rotations from a seed, applied to surfaces. Header-only.
 #pragma once
 
+#include "nodes/artefacts/meshes.h"
+
 #include <Eigen/Geometry>
 
 #include <random>
-
-#include "nodes/artefacts/meshes.h"
 
 namespace polyhex::test {
 

@@ -1,6 +1,9 @@
 // Generated tet meshes with known PolyCube structures, for the [segment] tests.
 #pragma once
 
+#include "nodes/artefacts/meshes.h"
+#include "nodes/artefacts/polycube.h"
+
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -9,16 +12,14 @@
 #include <set>
 #include <vector>
 
-#include "nodes/artefacts/meshes.h"
-#include "nodes/artefacts/polycube.h"
-
 namespace polyhex::test {
 
 using Point = Eigen::Vector3d;
 using PointMap = std::function<Point(const Point&)>;
 
 /// Flips tets with negative volume and drops unused vertices.
-inline TetMesh finish_tets(const std::vector<Point>& pts, std::vector<std::array<int, 4>> tets, const std::string& name) {
+inline TetMesh finish_tets(const std::vector<Point>& pts, std::vector<std::array<int, 4>> tets,
+                           const std::string& name) {
   std::vector<int> remap(pts.size(), -1);
   int n = 0;
   for (auto& t : tets) {
@@ -72,7 +73,8 @@ inline TetMesh voxel_tets(std::array<int, 3> n, double cell_size, const std::fun
 
 /// A box of cells^3 voxels per unit, size (sx, sy, sz) in units.
 inline TetMesh box_tets(int sx, int sy, int sz, int cells, const PointMap& map = {}) {
-  return voxel_tets({sx * cells, sy * cells, sz * cells}, 1.0 / cells, [](int, int, int) { return true; }, map, "box");
+  return voxel_tets(
+      {sx * cells, sy * cells, sz * cells}, 1.0 / cells, [](int, int, int) { return true; }, map, "box");
 }
 
 /// A triangle P0 P1 P2 in the (x, z) plane, split into n^2 triangles, extruded along y over [0, width]

@@ -3,7 +3,10 @@
 /// trust in the generators): closedness, manifold edges and vertices, orientation, genus, volume.
 #pragma once
 
+#include "nodes/artefacts/meshes.h"
+
 #include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -12,22 +15,20 @@
 #include <utility>
 #include <vector>
 
-#include "nodes/artefacts/meshes.h"
-
 namespace polyhex::test {
 
 struct SurfaceCheck {
-  long open_edges = 0;           ///< undirected edges used by fewer than 2 triangles
-  long nonmanifold_edges = 0;    ///< undirected edges used by more than 2 triangles
-  long misoriented_edges = 0;    ///< directed edges used more than once (inconsistent orientation)
-  long nonmanifold_vertices = 0; ///< vertices whose triangle fan is not a single cycle
+  long open_edges = 0;            ///< undirected edges used by fewer than 2 triangles
+  long nonmanifold_edges = 0;     ///< undirected edges used by more than 2 triangles
+  long misoriented_edges = 0;     ///< directed edges used more than once (inconsistent orientation)
+  long nonmanifold_vertices = 0;  ///< vertices whose triangle fan is not a single cycle
   long unused_vertices = 0;
-  long degenerate = 0;           ///< triangles with area below 1e-12 diag^2 or a repeated index
-  long components = 0;           ///< connected components (through shared vertices)
-  long euler = 0;                ///< V - E + F
-  double volume = 0;             ///< signed enclosed volume
-  double min_angle_deg = 180;    ///< smallest triangle angle
-  double diag = 0;               ///< bbox diagonal
+  long degenerate = 0;         ///< triangles with area below 1e-12 diag^2 or a repeated index
+  long components = 0;         ///< connected components (through shared vertices)
+  long euler = 0;              ///< V - E + F
+  double volume = 0;           ///< signed enclosed volume
+  double min_angle_deg = 180;  ///< smallest triangle angle
+  double diag = 0;             ///< bbox diagonal
   bool closed_manifold_oriented() const {
     return open_edges == 0 && nonmanifold_edges == 0 && misoriented_edges == 0 && nonmanifold_vertices == 0 &&
            unused_vertices == 0 && degenerate == 0;

@@ -1,16 +1,17 @@
 // Shared fixtures of the hex_extract / pad / optimize tests: exact PolyCube maps of voxel shapes.
 #pragma once
 
-#include <Eigen/Geometry>
-#include <cmath>
-#include <memory>
-#include <random>
-
 #include "nodes/artefacts/polycube_map.h"
 #include "nodes/polycube_segment/polycube_segment.h"
 #include "nodes/tetrahedralize/tetgen.h"
-#include "tests/helpers/voxel_shapes.h"
 #include "tests/helpers/hex_fixtures.h"  // grid_hex_mesh
+#include "tests/helpers/voxel_shapes.h"
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <memory>
+#include <random>
 
 namespace polyhex::test {
 

@@ -2,13 +2,13 @@
 // charts), tet meshes of them, and the boundary-face checks shared by stage tests.
 #pragma once
 
+#include "nodes/artefacts/meshes.h"
+
 #include <array>
 #include <map>
 #include <set>
 #include <tuple>
 #include <vector>
-
-#include "nodes/artefacts/meshes.h"
 
 namespace polyhex::test {
 
@@ -43,8 +43,10 @@ inline SurfaceMesh voxel_surface(const std::vector<std::array<int, 3>>& voxels, 
         }
         int a = vertex(q[0]), b = vertex(q[1]), cc = vertex(q[2]), d = vertex(q[3]);
         // (u, w, axis) is right-handed: CCW in the (u, w) plane faces +axis
-        if (s) F.push_back({a, b, cc}), F.push_back({a, cc, d});
-        else F.push_back({a, cc, b}), F.push_back({a, d, cc});
+        if (s)
+          F.push_back({a, b, cc}), F.push_back({a, cc, d});
+        else
+          F.push_back({a, cc, b}), F.push_back({a, d, cc});
       }
   SurfaceMesh m;
   m.V.resize(Eigen::Index(V.size()), 3);

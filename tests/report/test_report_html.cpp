@@ -1,20 +1,20 @@
 // The HTML report's data and page (report/report_html.h), on generated meshes and reports; the end-to-end
 // run in headless Chromium is tests/tools/test_report.cpp.
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/formats/hexmesh_io.h"
+#include "nodes/quality/quality_json.h"
+#include "report/report_html.h"
+#include "runtime/errors.h"
+#include "tests/helpers/cli.h"
+#include "tests/helpers/hex_fixtures.h"
+
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include <cstring>
 #include <fstream>
-#include <nlohmann/json.hpp>
 #include <numeric>
 #include <set>
-
-#include "nodes/formats/hexmesh_io.h"
-#include "nodes/algorithms/hex_quality.h"
-#include "nodes/quality/quality_json.h"
-#include "runtime/errors.h"
-#include "report/report_html.h"
-#include "tests/helpers/cli.h"
-#include "tests/helpers/hex_fixtures.h"
 
 using namespace polyhex;
 using json = nlohmann::json;
@@ -46,14 +46,16 @@ std::vector<T> unbase64(const std::string& s) {
 /// A report.json as `polyhex run` writes it for `mesh`: a quality node measuring it, a writer, two others.
 json report_of(const HexMesh& mesh) {
   json q = to_json(hex_quality(mesh, nullptr));
-  return {{"polyhex_version", "0.1.0"},
-          {"status", "ok"},
-          {"seconds", 3.5},
-          {"nodes",
-           {{"hex", {{"type", "hex_extract/lattice"}, {"seconds", 2.0}, {"cache_hit", false}, {"metrics", json::object()}}},
-            {"quality", {{"type", "quality/default"}, {"seconds", 0.25}, {"cache_hit", false}, {"metrics", q}}},
-            {"tets", {{"type", "tetrahedralize/tetgen"}, {"seconds", 1.0}, {"cache_hit", true}, {"metrics", json::object()}}},
-            {"write", {{"type", "write_hex/default"}, {"seconds", 0.1}, {"metrics", {{"path", "hex.vtk"}}}}}}}};
+  return {
+      {"polyhex_version", "0.1.0"},
+      {"status", "ok"},
+      {"seconds", 3.5},
+      {"nodes",
+       {{"hex", {{"type", "hex_extract/lattice"}, {"seconds", 2.0}, {"cache_hit", false}, {"metrics", json::object()}}},
+        {"quality", {{"type", "quality/default"}, {"seconds", 0.25}, {"cache_hit", false}, {"metrics", q}}},
+        {"tets",
+         {{"type", "tetrahedralize/tetgen"}, {"seconds", 1.0}, {"cache_hit", true}, {"metrics", json::object()}}},
+        {"write", {{"type", "write_hex/default"}, {"seconds", 0.1}, {"metrics", {{"path", "hex.vtk"}}}}}}}};
 }
 
 const json& figure(const json& data, const std::string& key) {
@@ -110,7 +112,8 @@ TEST_CASE("report html: figures verbatim, thresholds, histograms and irregular v
 TEST_CASE("report html: the retry block's min_sj is the threshold, and a figure below it fails", "[report]") {
   const HexMesh m = test::grid_hex_mesh(2, 2, 2);
   json rep = report_of(m);
-  rep["retry"] = {{"node", "quality"}, {"max_inverted", 0}, {"min_sj", 0.5}, {"chosen", 0}, {"attempts", json::array()}};
+  rep["retry"] = {
+      {"node", "quality"}, {"max_inverted", 0}, {"min_sj", 0.5}, {"chosen", 0}, {"attempts", json::array()}};
   CHECK(figure(report_page_data(rep, m), "sj_min")["threshold"]["value"] == 0.5);
   CHECK(figure(report_page_data(rep, m), "sj_min")["pass"] == true);
   rep["nodes"]["quality"]["metrics"]["sj_min"] = 0.4;
@@ -215,7 +218,8 @@ TEST_CASE("report html: three.js, report.json and the mesh are found or named", 
   std::ofstream(dir / "report.json") << odd.dump();
   write_hexmesh(m, dir / "hex.vtk");
   CHECK_THROWS_AS(write_report_html(dir.path), IOError);
-  CHECK_THROWS_WITH(write_report_html(dir.path), Contains("report.json") && Contains("not a report.json of polyhex run"));
+  CHECK_THROWS_WITH(write_report_html(dir.path),
+                    Contains("report.json") && Contains("not a report.json of polyhex run"));
   CHECK_FALSE(std::filesystem::exists(dir / "report.html"));
   std::ofstream(dir / "report.json") << "{ not json";
   CHECK_THROWS_WITH(write_report_html(dir.path), Contains("report.json") && Contains("not valid JSON"));

@@ -1,16 +1,5 @@
 // Cooperative interruption (runtime/cancel.h): the flag, the signal handlers, and the safe points of
 // the long stages (rotation_deform, polycube_segment, position_deform, hex_extract).
-#include <catch2/catch.hpp>
-
-#include <signal.h>
-#include <unistd.h>
-
-#include <chrono>
-#include <csignal>
-#include <cstdlib>
-#include <thread>
-#include <memory>
-
 #include "nodes/hex_extract/hex_extract.h"
 #include "nodes/polycube_segment/polycube_segment.h"
 #include "nodes/position_deform/position_deform.h"
@@ -18,8 +7,18 @@
 #include "nodes/tetrahedralize/tetgen.h"
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
-#include "tests/helpers/voxel_shapes.h"
 #include "tests/helpers/voxel_maps.h"
+#include "tests/helpers/voxel_shapes.h"
+
+#include <catch2/catch.hpp>
+
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <memory>
+#include <signal.h>
+#include <thread>
+#include <unistd.h>
 
 using namespace polyhex;
 using Catch::Matchers::Equals;
@@ -86,12 +85,12 @@ TEST_CASE("cancel: SIGINT and SIGTERM sent to the process set the flag", "[robus
   }
 }
 
-TEST_CASE("cancel: a library that installs its own SIGTERM handler for a while cannot take the signal",
-          "[robust]") {
+TEST_CASE("cancel: a library that installs its own SIGTERM handler for a while cannot take the signal", "[robust]") {
   // what METIS does during an ordering (GKlib gk_sigtrap): a handler that would longjmp
   ClearInterrupt guard;
   install_interrupt_handlers();
-  struct sigaction trap {}, old {};
+  struct sigaction trap {
+  }, old{};
   trap.sa_handler = [](int) { std::abort(); };
   sigemptyset(&trap.sa_mask);
   REQUIRE(sigaction(SIGTERM, &trap, &old) == 0);

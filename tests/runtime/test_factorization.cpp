@@ -1,11 +1,11 @@
 // Tests of the CHOLMOD factorization helper (runtime/factorization.h).
-#include <catch2/catch.hpp>
-
-#include <Eigen/SparseCore>
-#include <vector>
-
 #include "runtime/errors.h"
 #include "runtime/factorization.h"
+
+#include <Eigen/SparseCore>
+#include <catch2/catch.hpp>
+
+#include <vector>
 
 using polyhex::CholmodFactorization;
 using polyhex::SolveMode;
@@ -15,9 +15,9 @@ namespace {
 
 // Expects a SolverError whose message matches `matcher` (Catch2 v2 has no type+message matcher).
 #define CHECK_SOLVER_ERROR(expr, matcher) \
-  do {                                     \
-    CHECK_THROWS_AS(expr, SolverError);    \
-    CHECK_THROWS_WITH(expr, matcher);      \
+  do {                                    \
+    CHECK_THROWS_AS(expr, SolverError);   \
+    CHECK_THROWS_WITH(expr, matcher);     \
   } while (0)
 
 /// 7-point Laplacian of an m^3 grid plus `shift` * identity; lower triangle only, or full.
@@ -137,7 +137,8 @@ TEST_CASE("cholmod: failures throw SolverError with a clear message", "[cholmod]
   }
   SECTION("wrong right-hand-side size") {
     CholmodFactorization f(laplacian3d(3, 1.0, false));
-    CHECK_SOLVER_ERROR(f.solve(Eigen::VectorXd(Eigen::VectorXd::Ones(5))), Catch::Equals("Cholesky solve: right-hand side has 5 rows, matrix has 27"));
+    CHECK_SOLVER_ERROR(f.solve(Eigen::VectorXd(Eigen::VectorXd::Ones(5))),
+                       Catch::Equals("Cholesky solve: right-hand side has 5 rows, matrix has 27"));
   }
   SECTION("non-finite right-hand side") {
     CholmodFactorization f(laplacian3d(3, 1.0, false));
@@ -149,7 +150,8 @@ TEST_CASE("cholmod: failures throw SolverError with a clear message", "[cholmod]
     Eigen::SparseMatrix<double> R(3, 4);
     CholmodFactorization f;
     CHECK_SOLVER_ERROR(f.analyse(R), Catch::Equals("Cholesky analysis: matrix is 3 by 4, not square"));
-    Eigen::SparseMatrix<double> U = Eigen::SparseMatrix<double>(full_of(laplacian3d(3, 1.0, false)).triangularView<Eigen::Upper>());
+    Eigen::SparseMatrix<double> U =
+        Eigen::SparseMatrix<double>(full_of(laplacian3d(3, 1.0, false)).triangularView<Eigen::Upper>());
     CHECK_SOLVER_ERROR(f.analyse(U), Catch::Contains("only its upper triangle"));
     f.analyse(laplacian3d(3, 1.0, false));
     CHECK_SOLVER_ERROR(f.factor(laplacian3d(3, 1.0, true)), Catch::Contains("pattern differs"));

@@ -1,10 +1,10 @@
 // L-BFGS helper: analytic minimisers, the stop callback's contract, the line search's give-up.
+#include "runtime/lbfgs.h"
+
 #include <catch2/catch.hpp>
 
 #include <cmath>
 #include <vector>
-
-#include "runtime/lbfgs.h"
 
 using namespace polyhex;
 
@@ -25,7 +25,8 @@ TEST_CASE("lbfgs finds the minimiser of an ill-conditioned quadratic and of Rose
   o.iterations = 2000;
   o.gradient_tol = 1e-10;
   long count = 0;
-  const LbfgsEnd end = lbfgs_minimize(x, quad, o, [](int, const Eigen::VectorXd&, bool) { return false; }, &count);
+  const LbfgsEnd end = lbfgs_minimize(
+      x, quad, o, [](int, const Eigen::VectorXd&, bool) { return false; }, &count);
   CHECK(end != LbfgsEnd::Iterations);
   for (int i = 0; i < n; ++i) CHECK(x[i] == Approx(double(i)).margin(1e-5));
   CHECK(count > 0);
@@ -56,10 +57,13 @@ TEST_CASE("lbfgs asks stop before each iteration and after each step, and ends w
   LbfgsOptions o;
   o.iterations = 100;
   long count = 0;
-  const LbfgsEnd end = lbfgs_minimize(x, f, o, [&](int done, const Eigen::VectorXd&, bool after) {
-    calls.push_back({done, after});
-    return after && done == 3;
-  }, &count);
+  const LbfgsEnd end = lbfgs_minimize(
+      x, f, o,
+      [&](int done, const Eigen::VectorXd&, bool after) {
+        calls.push_back({done, after});
+        return after && done == 3;
+      },
+      &count);
   CHECK(end == LbfgsEnd::Stopped);
   CHECK(count == 3);
   REQUIRE(calls.size() == 6);
@@ -80,8 +84,13 @@ TEST_CASE("lbfgs stalls, x unchanged, when no step decreases the energy within m
   int evals = 0;
   LbfgsOptions o;
   o.max_halvings = 5;
-  const LbfgsEnd end = lbfgs_minimize(x, [&](const Eigen::VectorXd& y, Eigen::VectorXd* g) { ++evals; return liar(y, g); },
-                                      o, [](int, const Eigen::VectorXd&, bool) { return false; });
+  const LbfgsEnd end = lbfgs_minimize(
+      x,
+      [&](const Eigen::VectorXd& y, Eigen::VectorXd* g) {
+        ++evals;
+        return liar(y, g);
+      },
+      o, [](int, const Eigen::VectorXd&, bool) { return false; });
   CHECK(end == LbfgsEnd::Stalled);
   CHECK(x == x0);
   CHECK(evals == 1 + 5);  // the start, then one per halving

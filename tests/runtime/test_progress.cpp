@@ -1,4 +1,6 @@
 // The terminal progress bar and the -v lines of `polyhex run` (runtime/progress.h).
+#include "runtime/progress.h"
+
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -6,8 +8,6 @@
 #include <cstdlib>
 #include <string>
 #include <thread>
-
-#include "runtime/progress.h"
 
 using namespace polyhex;
 using Catch::Matchers::Contains;
@@ -66,7 +66,7 @@ TEST_CASE("progress: on a terminal one line updates in place; a node's end is a 
                  erase +  // the progress event within 50 ms of the start is not drawn; done erases the bar
                  "polyhex: rotate           rotation_deform/quaternion_laplace done in 1.25 s\n" + erase +
                  "[polycube] ####----------------  20% poisson" + erase);  // drawn on an empty line, erased at the end
-  CHECK(s.find("\n[") == std::string::npos);  // no bar ever ends a line
+  CHECK(s.find("\n[") == std::string::npos);                               // no bar ever ends a line
 }
 
 TEST_CASE("progress: redraws only when the line changes, at most every 50 ms", "[progress]") {

@@ -2,20 +2,19 @@
 // file in stderr and leaves no mesh (nor a temporary file) in the output folder. Also the resource
 // limit (refused up front), output faults (full disk, name clashes) and scale invariance of the
 // default pipeline (1e-9 and 1e9 scaled models mesh like the unit model).
-#include <catch2/catch.hpp>
+#include "nodes/algorithms/shapes.h"
+#include "nodes/formats/surface_io.h"
+#include "tests/helpers/cli.h"
 
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <nlohmann/json.hpp>
 #include <string>
-
-#include "nodes/formats/surface_io.h"
-#include "nodes/algorithms/shapes.h"
-#include "tests/helpers/cli.h"
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
@@ -77,7 +76,8 @@ TEST_CASE("cli bad input: bad surfaces exit 1 naming node `surface` and the file
       {"empty.obj", "", "empty file"},
       {"unknown.xyz", "1 2 3\n", "unknown surface extension `.xyz`"},
       {"cut.stl", stl_bin, "truncated or corrupt binary STL"},
-      {"counts.off", "OFF\n5 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n", "line 7: truncated: the header announces 4 faces, the file ends after 0"},
+      {"counts.off", "OFF\n5 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n",
+       "line 7: truncated: the header announces 4 faces, the file ends after 0"},
       {"nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\n", "line 2: vertex 2 has a non-finite coordinate"},
       {"range.obj", kTetV + "f 1 3 2\nf 1 2 7\n", "line 6: vertex index 7 out of range (4 vertices)"},
   };
@@ -92,7 +92,8 @@ TEST_CASE("cli bad input: bad surfaces exit 1 naming node `surface` and the file
 // Surfaces the reader passes on with their defects: the conditioning refuses what no repair makes a
 // solid, strict policy refuses every defect, and a config without the conditioning is stopped at
 // TetGen with the reader's message.
-TEST_CASE("cli bad input: defective surfaces are refused by `condition` or `tets`, naming the file", "[cli][badinput]") {
+TEST_CASE("cli bad input: defective surfaces are refused by `condition` or `tets`, naming the file",
+          "[cli][badinput]") {
   TempDir d("badinput_defects");
   struct Case {
     std::string name, content, strict_message, baseline_message;
@@ -102,7 +103,8 @@ TEST_CASE("cli bad input: defective surfaces are refused by `condition` or `tets
        "cannot tetrahedralize a surface with 4 vertices"},
       {"open.obj", kTetV + "f 1 3 2\nf 1 2 4\nf 1 4 3\n", "1 open boundary loop",
        "cannot tetrahedralize a surface with 4 vertices"},
-      {"edge.obj", kTetV + "v 0 -1 0\nv 0 0 -1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\nf 1 5 2\nf 1 2 6\nf 1 6 5\nf 2 5 6\n",
+      {"edge.obj",
+       kTetV + "v 0 -1 0\nv 0 0 -1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\nf 1 5 2\nf 1 2 6\nf 1 6 5\nf 2 5 6\n",
        "1 non-manifold edge", "non-manifold: 1 edges are used by more than 2 triangles"},
       {"pinch.obj",
        kTetV + "v -1 0 0\nv 0 -1 0\nv 0 0 -1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\nf 1 5 6\nf 1 6 7\nf 1 7 5\nf 5 7 6\n",
@@ -131,8 +133,10 @@ TEST_CASE("cli bad input: defective surfaces are refused by `condition` or `tets
   }
 }
 
-TEST_CASE("cli bad input: a self-intersecting surface is repaired, refused when strict, stopped at `tets` without "
-          "the conditioning", "[cli][badinput]") {
+TEST_CASE(
+    "cli bad input: a self-intersecting surface is repaired, refused when strict, stopped at `tets` without "
+    "the conditioning",
+    "[cli][badinput]") {
   TempDir d("badinput_selfx");
   // Two unit cubes overlapping: each closed and manifold, together self-intersecting.
   std::string s;
@@ -154,7 +158,8 @@ TEST_CASE("cli bad input: a self-intersecting surface is repaired, refused when 
     i = j + 1;
   }
   const fs::path in = write(d / "two_cubes.obj", s + f1), out = d / "out";
-  CliRun r = run_cli("run " + config("baseline.json") + " --input " + in.string() + " --out " + out.string() + " --no-cache");
+  CliRun r =
+      run_cli("run " + config("baseline.json") + " --input " + in.string() + " --out " + out.string() + " --no-cache");
   INFO(r.err);
   CHECK(r.code == 1);
   CHECK_THAT(r.err, Contains("node `tets` (`tetrahedralize/tetgen`)") && Contains(in.string()) &&
@@ -187,7 +192,8 @@ TEST_CASE("cli bad input: bad tet meshes exit 1 naming node and file", "[cli][ba
       {"flat.mesh", head + "1 1 0 0\nTetrahedra\n2\n1 2 3 4 0\n1 2 3 5 0\nEnd\n", "tet 1 is degenerate: volume"},
       {"fold.mesh", head + "0.2 0.2 0.5 0\nTetrahedra\n2\n1 2 3 4 0\n1 2 3 5 0\nEnd\n",
        "tets 0 and 1 lie on the same side of their shared face (0, 1, 2): the tets overlap"},
-      {"range.mesh", head + "1 1 1 0\nTetrahedra\n1\n1 2 3 9 0\nEnd\n", "line 12: Tetrahedra entry 1: vertex index 9 out of range (5 vertices, 1-based)"},
+      {"range.mesh", head + "1 1 1 0\nTetrahedra\n1\n1 2 3 9 0\nEnd\n",
+       "line 12: Tetrahedra entry 1: vertex index 9 out of range (5 vertices, 1-based)"},
       {"empty.vtk", "", "not a legacy VTK file"},
   };
   for (const auto& c : cases) {
@@ -226,11 +232,12 @@ TEST_CASE("cli bad input: config errors exit 2", "[cli][badinput]") {
 TEST_CASE("cli bad input: a request far beyond the machine is refused up front", "[cli][badinput]") {
   TempDir d("badinput_limit");
   CliRun r = run_cli("run " + config("default.json") + " --set tets.edge_length=0.002 --out " + (d / "out").string() +
-                  " --no-cache");
+                     " --no-cache");
   INFO(r.err);
   CHECK(r.code == 1);
   CHECK_THAT(r.err, Contains("node `tets` (`tetrahedralize/tetgen`)") && Contains("refused: edge_length 0.002") &&
-                        Contains("tets") && Contains("more than max_tets = 20000000") && Contains("use edge_length >= "));
+                        Contains("tets") && Contains("more than max_tets = 20000000") &&
+                        Contains("use edge_length >= "));
   CHECK(r.seconds < 20);  // refused before TetGen runs (the built-in shape takes a moment to build)
   check_nothing_written(d / "out");
 }
@@ -263,7 +270,8 @@ TEST_CASE("cli output faults: full disk, output folder is a file, output file is
     CliRun r = run_cli(base + out.string());
     INFO(r.err);
     CHECK(r.code == 1);
-    CHECK_THAT(r.err, Contains("node `write`") && Contains("hex.vtk: cannot write the file: a folder of that name exists"));
+    CHECK_THAT(r.err,
+               Contains("node `write`") && Contains("hex.vtk: cannot write the file: a folder of that name exists"));
     CHECK(fs::is_empty(out / "hex.vtk"));
     for (auto& e : fs::directory_iterator(out)) CHECK(e.path().filename().string().find(".tmp.") == std::string::npos);
   }
@@ -272,14 +280,15 @@ TEST_CASE("cli output faults: full disk, output folder is a file, output file is
 TEST_CASE("cli scale: 1e-9 and 1e9 scaled models mesh like the unit model", "[cli][badinput]") {
   TempDir d("badinput_scale");
   const polyhex::SurfaceMesh unit = polyhex::make_shape({"l_block", 24});
-  const std::string args = " --set tets.edge_length=0.06 --set segment.hex_edge_length=0.05"
-                           " --set polycube.edge_length=0.05 --threads 2 --no-cache";
+  const std::string args =
+      " --set tets.edge_length=0.06 --set segment.hex_edge_length=0.05"
+      " --set polycube.edge_length=0.05 --threads 2 --no-cache";
   auto mesh = [&](const std::string& name, double k) {
     polyhex::SurfaceMesh m = unit;
     m.V *= k;
     polyhex::write_surface(m, d / (name + ".obj"));
     CliRun r = run_cli("run " + config("default.json") + " --input " + (d / (name + ".obj")).string() + " --out " +
-                    (d / name).string() + args);
+                       (d / name).string() + args);
     INFO(name << ": " << r.err);
     REQUIRE(r.code == 0);
     std::ifstream in(d / name / "report.json");

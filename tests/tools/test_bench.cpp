@@ -1,15 +1,14 @@
 // `polyhex bench` end to end (the binary): the JSON schema, repeat counts, min <= median <= max,
 // throughput in each node's unit, the factorization figures, and a failing run.
-#include <catch2/catch.hpp>
+#include "tests/helpers/cli.h"
 
-#include <unistd.h>
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include <filesystem>
 #include <fstream>
-#include <nlohmann/json.hpp>
 #include <string>
-
-#include "tests/helpers/cli.h"
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
@@ -48,10 +47,11 @@ TEST_CASE("bench: the throughput config, coarse: JSON schema, units, solver figu
   const fs::path dir = bench_dir("schema");
   const std::string config = std::string(POLYHEX_SOURCE_DIR) + "/configs/bench/throughput_200k.json";
   CliRun r = bench(config +
-                         " --set surface.resolution=24 --set tets.edge_length=0.08 --set segment.hex_edge_length=0.06"
-                         " --set polycube.edge_length=0.06 --set quality.samples=5000 --threads 2 --repeat 3 --warmup 1"
-                         " --json " + (dir / "bench.json").string(),
-                     dir);
+                       " --set surface.resolution=24 --set tets.edge_length=0.08 --set segment.hex_edge_length=0.06"
+                       " --set polycube.edge_length=0.06 --set quality.samples=5000 --threads 2 --repeat 3 --warmup 1"
+                       " --json " +
+                       (dir / "bench.json").string(),
+                   dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
   const json b = json::parse(std::ifstream(dir / "bench.json"));
@@ -67,9 +67,10 @@ TEST_CASE("bench: the throughput config, coarse: JSON schema, units, solver figu
   REQUIRE(b["units"].is_object());
   CHECK(b["units"]["tetrahedralize"].get<std::string>().rfind("tets/s", 0) == 0);
 
-  const char* ids[] = {"surface", "tets", "rotate", "segment", "polycube", "hex", "pad", "pad_peeled", "optimize", "quality", "write"};
-  const char* units[] = {"triangles/s", "tets/s", "tets/s", "triangles/s", "tets/s",
-                         "hexes/s", "hexes/s", "hexes/s", "hexes/s", "hexes/s", "hexes/s"};
+  const char* ids[] = {"surface", "tets",       "rotate",   "segment", "polycube", "hex",
+                       "pad",     "pad_peeled", "optimize", "quality", "write"};
+  const char* units[] = {"triangles/s", "tets/s",  "tets/s",  "triangles/s", "tets/s", "hexes/s",
+                         "hexes/s",     "hexes/s", "hexes/s", "hexes/s",     "hexes/s"};
   REQUIRE(b["nodes"].size() == 11);
   std::map<std::string, json> by_id;
   for (size_t i = 0; i < 11; ++i) {
@@ -112,9 +113,10 @@ TEST_CASE("bench: --json - puts the JSON on stdout; a failing run exits 1 naming
   const fs::path dir = bench_dir("stdout");
   const std::string baseline = std::string(POLYHEX_SOURCE_DIR) + "/configs/baseline.json";
   const std::string cube = std::string(POLYHEX_SOURCE_DIR) + "/tests/fixtures/io/cube.off";
-  CliRun r = bench(baseline + " --input " + cube + " --set tets.edge_length=0.2 --set quality.samples=1000"
-                                " --threads 1 --repeat 2 --warmup 0 --json -",
-                     dir);
+  CliRun r = bench(baseline + " --input " + cube +
+                       " --set tets.edge_length=0.2 --set quality.samples=1000"
+                       " --threads 1 --repeat 2 --warmup 0 --json -",
+                   dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
   const json b = json::parse(r.out);  // nothing but the JSON on stdout
@@ -124,9 +126,9 @@ TEST_CASE("bench: --json - puts the JSON on stdout; a failing run exits 1 naming
   CHECK_THAT(r.err, Contains("median s"));  // the table went to stderr
   CHECK_FALSE(b["nodes"][2].contains("solver"));
 
-  CliRun bad = bench(baseline + " --set surface.path=/nonexistent/part.off --repeat 2 --json " +
-                           (dir / "bench.json").string(),
-                       bench_dir("failing"));
+  CliRun bad =
+      bench(baseline + " --set surface.path=/nonexistent/part.off --repeat 2 --json " + (dir / "bench.json").string(),
+            bench_dir("failing"));
   CHECK(bad.code == 1);
   CHECK_THAT(bad.err, Contains("warm-up run 1 failed: node `surface` (`read_surface/default`): /nonexistent/part.off"));
   CHECK_FALSE(fs::exists(dir / "bench.json"));

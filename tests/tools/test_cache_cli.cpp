@@ -1,13 +1,13 @@
 // The artefact cache through the polyhex binary: default location, --cache/--no-cache, two concurrent
 // processes on one cache, and `polyhex cache stats|clear|prune`.
+#include "tests/helpers/cli.h"
+
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include <filesystem>
 #include <fstream>
-#include <nlohmann/json.hpp>
 #include <string>
-
-#include "tests/helpers/cli.h"
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
@@ -98,7 +98,8 @@ TEST_CASE("cache cli: default folder beside the output, --no-cache, and stats/pr
   CHECK_FALSE(fs::exists(cache));
   CHECK(report(dir / "off")["nodes"]["tets"]["cache_hit"] == false);
 
-  CliRun both = run_polyhex("run " + cfg.string() + " --no-cache --cache " + cache.string() + " --out " + (dir / "x").string());
+  CliRun both =
+      run_polyhex("run " + cfg.string() + " --no-cache --cache " + cache.string() + " --out " + (dir / "x").string());
   CHECK(both.code == 2);
   CHECK_THAT(both.out, Contains("--no-cache") && Contains("--cache"));
 

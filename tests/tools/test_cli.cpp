@@ -1,13 +1,13 @@
 // End-to-end runs of the polyhex binary: exit codes, messages naming file/node, report.json, check vs run.
+#include "tests/helpers/cli.h"
+#include "tests/helpers/report.h"
+
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include <filesystem>
 #include <fstream>
-#include <nlohmann/json.hpp>
 #include <string>
-
-#include "tests/helpers/cli.h"
-#include "tests/helpers/report.h"
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
@@ -23,8 +23,9 @@ std::string config(const std::string& name) { return std::string(POLYHEX_SOURCE_
 
 TEST_CASE("cli: the default (PolyCube) config meshes a built-in shape with no inverted hex", "[cli]") {
   fs::path out = polyhex::test::fresh_dir("cli_polycube");
-  CliRun r = run_polyhex("run " + config("default.json") + " --out " + out.string() +
-                 " --set tets.edge_length=0.04 --set segment.hex_edge_length=0.03 --set polycube.edge_length=0.03 --threads 2");
+  CliRun r = run_polyhex(
+      "run " + config("default.json") + " --out " + out.string() +
+      " --set tets.edge_length=0.04 --set segment.hex_edge_length=0.03 --set polycube.edge_length=0.03 --threads 2");
   INFO(r.out);
   REQUIRE(r.code == 0);
   std::ifstream in(out / "report.json");
@@ -41,7 +42,8 @@ TEST_CASE("cli: the default (PolyCube) config meshes a built-in shape with no in
 
 TEST_CASE("cli: the baseline config runs on a built-in shape; check agrees with the report", "[cli]") {
   fs::path out = polyhex::test::fresh_dir("cli_default");
-  CliRun r = run_polyhex("run " + config("baseline.json") + " --out " + out.string() + " --set tets.edge_length=0.08 --threads 2");
+  CliRun r = run_polyhex("run " + config("baseline.json") + " --out " + out.string() +
+                         " --set tets.edge_length=0.08 --threads 2");
   INFO(r.out);
   REQUIRE(r.code == 0);
   std::ifstream in(out / "report.json");
@@ -67,7 +69,8 @@ TEST_CASE("cli: the baseline config runs on a built-in shape; check agrees with 
 TEST_CASE("cli: bad input names the file and the node, exits non-zero, writes no mesh", "[cli]") {
   fs::path out = polyhex::test::fresh_dir("cli_bad");
   std::ofstream(out / "open.off") << "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
-  CliRun r = run_polyhex("run " + config("baseline.json") + " --input " + (out / "open.off").string() + " --out " + (out / "o").string());
+  CliRun r = run_polyhex("run " + config("baseline.json") + " --input " + (out / "open.off").string() + " --out " +
+                         (out / "o").string());
   INFO(r.out);
   CHECK(r.code == 1);
   // the baseline has no conditioning: the reader passes the open surface on, TetGen's node refuses it
@@ -77,7 +80,8 @@ TEST_CASE("cli: bad input names the file and the node, exits non-zero, writes no
   json rep = json::parse(in);
   CHECK(rep["status"] == "error");
 
-  CliRun m = run_polyhex("run " + config("baseline.json") + " --input " + (out / "missing.stl").string() + " --out " + (out / "o2").string());
+  CliRun m = run_polyhex("run " + config("baseline.json") + " --input " + (out / "missing.stl").string() + " --out " +
+                         (out / "o2").string());
   CHECK(m.code == 1);
   CHECK_THAT(m.out, Contains("missing.stl"));
 }
@@ -130,9 +134,11 @@ fs::path retry_config(const fs::path& dir, const json& retry) {
 TEST_CASE("cli: retry runs the variants while no attempt is accepted and keeps the best", "[cli]") {
   fs::path out = polyhex::test::fresh_dir("cli_retry");
   SECTION("never accepted: every variant runs, the best attempt's mesh and report are kept") {
-    fs::path cfg = retry_config(out, {{"node", "quality"}, {"min_sj", 1.0},
+    fs::path cfg = retry_config(out, {{"node", "quality"},
+                                      {"min_sj", 1.0},
                                       {"variants", {{{"tets.edge_length", 0.1}}, {{"tets.edge_length", 0.12}}}}});
-    CliRun r = run_polyhex("run " + cfg.string() + " --out " + (out / "o").string() + " --set tets.edge_length=0.08 --no-cache --threads 2");
+    CliRun r = run_polyhex("run " + cfg.string() + " --out " + (out / "o").string() +
+                           " --set tets.edge_length=0.08 --no-cache --threads 2");
     INFO(r.out);
     REQUIRE(r.code == 0);
     std::ifstream in(out / "o" / "report.json");
@@ -162,8 +168,10 @@ TEST_CASE("cli: retry runs the variants while no attempt is accepted and keeps t
     CHECK(rep["seconds"].get<double>() >= att[0]["seconds"].get<double>() + att[1]["seconds"].get<double>());
   }
   SECTION("with the default cache the attempts share the cache beside OUT") {
-    fs::path cfg = retry_config(out, {{"node", "quality"}, {"min_sj", 1.0}, {"variants", {{{"tets.edge_length", 0.12}}}}});
-    CliRun r = run_polyhex("run " + cfg.string() + " --out " + (out / "c").string() + " --set tets.edge_length=0.1 --threads 2");
+    fs::path cfg =
+        retry_config(out, {{"node", "quality"}, {"min_sj", 1.0}, {"variants", {{{"tets.edge_length", 0.12}}}}});
+    CliRun r = run_polyhex("run " + cfg.string() + " --out " + (out / "c").string() +
+                           " --set tets.edge_length=0.1 --threads 2");
     INFO(r.out);
     REQUIRE(r.code == 0);
     CHECK(fs::exists(out / ".polyhex-cache"));
@@ -172,8 +180,10 @@ TEST_CASE("cli: retry runs the variants while no attempt is accepted and keeps t
     CHECK(json::parse(in)["retry"]["attempts"].size() == 2);
   }
   SECTION("accepted at once: no variant runs") {
-    fs::path cfg = retry_config(out, {{"node", "quality"}, {"min_sj", 0.0}, {"variants", {{{"tets.edge_length", 0.1}}}}});
-    CliRun r = run_polyhex("run " + cfg.string() + " --out " + (out / "a").string() + " --set tets.edge_length=0.1 --threads 2");
+    fs::path cfg =
+        retry_config(out, {{"node", "quality"}, {"min_sj", 0.0}, {"variants", {{{"tets.edge_length", 0.1}}}}});
+    CliRun r = run_polyhex("run " + cfg.string() + " --out " + (out / "a").string() +
+                           " --set tets.edge_length=0.1 --threads 2");
     INFO(r.out);
     REQUIRE(r.code == 0);
     std::ifstream in(out / "a" / "report.json");
@@ -191,7 +201,8 @@ TEST_CASE("cli: retry runs the variants while no attempt is accepted and keeps t
       CHECK_THAT(r.out, Contains(says));
       CHECK_FALSE(fs::exists(out / "bad" / "hex.vtk"));
     };
-    fails({{"node", "quality"}, {"variants", {{{"tets.edge_length", 0.1}}}}, {"min_sjj", 0.3}}, "unknown key `min_sjj`");
+    fails({{"node", "quality"}, {"variants", {{{"tets.edge_length", 0.1}}}}, {"min_sjj", 0.3}},
+          "unknown key `min_sjj`");
     fails({{"node", "nowhere"}, {"variants", {{{"tets.edge_length", 0.1}}}}}, "retry.node: no node with id `nowhere`");
     fails({{"node", "quality"}, {"variants", {{{"tets.edge_lenght", 0.1}}}}}, "retry.variants[0]");
     fails({{"node", "quality"}, {"variants", json::array()}}, "`variants` must be a non-empty array");

@@ -1,20 +1,19 @@
 // Determinism: the same input and config give byte-identical meshes and identical figures for 1, 2
 // and 8 threads and across repeated runs (issue 8). Also: the BLAS under CHOLMOD runs on one thread.
-#include <catch2/catch.hpp>
-
-#include <dlfcn.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <filesystem>
-#include <fstream>
-#include <nlohmann/json.hpp>
-#include <string>
-#include <vector>
-
 #include "runtime/factorization.h"
 #include "tests/helpers/cli.h"
 #include "tests/helpers/report.h"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+#include <sys/wait.h>
+
+#include <dlfcn.h>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <unistd.h>
+#include <vector>
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
@@ -25,9 +24,7 @@ using polyhex::test::run_command;
 namespace {
 
 /// Wall-clock figures, which legitimately differ between runs.
-bool timing_key(const std::string& k) {
-  return k.find("seconds") != std::string::npos || k == "factor_solve_fraction";
-}
+bool timing_key(const std::string& k) { return k.find("seconds") != std::string::npos || k == "factor_solve_fraction"; }
 
 /// Every difference between two reports' node metrics (timings left out), as "node.key: a != b".
 std::vector<std::string> metric_differences(const json& a, const json& b) {
@@ -37,8 +34,8 @@ std::vector<std::string> metric_differences(const json& a, const json& b) {
     const json& mb = b["nodes"][it.key()]["metrics"];
     for (auto m = ma.begin(); m != ma.end(); ++m)
       if (!timing_key(m.key()) && (!mb.contains(m.key()) || mb[m.key()] != m.value()))
-        out.push_back(it.key() + "." + m.key() + ": " + m.value().dump() + " != " +
-                      (mb.contains(m.key()) ? mb[m.key()].dump() : std::string("(missing)")));
+        out.push_back(it.key() + "." + m.key() + ": " + m.value().dump() +
+                      " != " + (mb.contains(m.key()) ? mb[m.key()].dump() : std::string("(missing)")));
     if (mb.size() != ma.size()) out.push_back(it.key() + ": different metric keys");
   }
   return out;
@@ -51,7 +48,8 @@ TEST_CASE("determinism: default config, 1 / 2 / 8 threads and a repeated run giv
   const fs::path root = polyhex::test::fresh_dir("robust_det");
   const std::string bin = POLYHEX_BINARY;
   // a coarse built-in shape with curved and sharp features, so every stage has work to do
-  CliRun s = run_command(bin + " shapes fandisk_like --resolution 16 --out " + (root / "fandisk.obj").string() + " 2>&1");
+  CliRun s =
+      run_command(bin + " shapes fandisk_like --resolution 16 --out " + (root / "fandisk.obj").string() + " 2>&1");
   INFO(s.out);
   REQUIRE(s.code == 0);
 
@@ -66,9 +64,10 @@ TEST_CASE("determinism: default config, 1 / 2 / 8 threads and a repeated run giv
     // and no run can find another's artefact cache
     const fs::path dir = root / ("run" + std::to_string(runs.size()));
     fs::create_directories(dir);
-    CliRun r = run_command("cd " + dir.string() + " && " + bin + " run " + POLYHEX_SOURCE_DIR + "/configs/default.json" +
-                     " --input ../fandisk.obj --out out --threads " + std::to_string(threads) +
-                     " --set tets.edge_length=0.06 --set segment.hex_edge_length=0.06 --set polycube.edge_length=0.06 2>&1");
+    CliRun r = run_command(
+        "cd " + dir.string() + " && " + bin + " run " + POLYHEX_SOURCE_DIR + "/configs/default.json" +
+        " --input ../fandisk.obj --out out --threads " + std::to_string(threads) +
+        " --set tets.edge_length=0.06 --set segment.hex_edge_length=0.06 --set polycube.edge_length=0.06 2>&1");
     INFO("threads " << threads << ": " << r.out);
     REQUIRE(r.code == 0);
     runs.push_back({threads, read_text(dir / "out" / "hex.vtk"), json::parse(read_text(dir / "out" / "report.json"))});

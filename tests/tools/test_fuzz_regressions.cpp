@@ -4,6 +4,11 @@
 //
 // The bugs they caught: readers reserved/resized by a header count before checking it against the file
 // (now TextCursor::checked_count); load_config_json let nlohmann's out_of_range (1e400) escape.
+#include "graph/config.h"
+#include "graph/pipeline.h"
+#include "runtime/errors.h"
+#include "tests/fuzz/fuzz_common.h"
+
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -12,11 +17,6 @@
 #include <iterator>
 #include <string>
 #include <vector>
-
-#include "graph/config.h"
-#include "graph/pipeline.h"
-#include "runtime/errors.h"
-#include "tests/fuzz/fuzz_common.h"
 
 namespace fs = std::filesystem;
 
@@ -70,8 +70,8 @@ TEST_CASE("fuzz regressions: config path (load, parse, build)", "[robust]") {
   REQUIRE(files.size() >= 2);
   for (const fs::path& f : files) {
     DYNAMIC_SECTION("config/" << f.filename().string()) {
-      CHECK_THROWS_AS(polyhex::Pipeline::build(polyhex::parse_config(
-                          polyhex::load_config_json(f, {{"input", "in.off"}}), f.string())),
+      CHECK_THROWS_AS(polyhex::Pipeline::build(
+                          polyhex::parse_config(polyhex::load_config_json(f, {{"input", "in.off"}}), f.string())),
                       polyhex::ConfigError);
     }
   }

@@ -1,22 +1,21 @@
 // SIGINT / SIGTERM during a long `polyhex run`: exit 130 within a few seconds, "interrupted" on
 // stderr, no final mesh, no temporary file, report.json with status "interrupted".
-#include <catch2/catch.hpp>
+#include "tests/helpers/cli.h"
 
-#include <signal.h>
-#include <spawn.h>
-#include <fcntl.h>
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <chrono>
+#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
-#include <nlohmann/json.hpp>
+#include <signal.h>
+#include <spawn.h>
 #include <string>
 #include <thread>
+#include <unistd.h>
 #include <vector>
-
-#include "tests/helpers/cli.h"
 
 extern char** environ;
 
@@ -84,11 +83,11 @@ void interrupt_run(int sig, const std::string& marker, const std::string& signam
     pid_t p = spawn({"shapes", "fandisk_like", "--resolution", "16", "--out", surface.string()}, dir / "shapes.txt");
     REQUIRE(wait_for(p, 60) == 0);
   }
-  pid_t pid = spawn({"run", std::string(POLYHEX_SOURCE_DIR) + "/configs/default.json", "--input", surface.string(),
-                     "--out", out.string(), "--threads", "2", "--save-all", "--set", "tets.edge_length=0.04",
-                     "--set", "rotate.iterations=50", "--set", "segment.hex_edge_length=0.015", "--set",
-                     "polycube.edge_length=0.015"},
-                    log);
+  pid_t pid =
+      spawn({"run", std::string(POLYHEX_SOURCE_DIR) + "/configs/default.json", "--input", surface.string(), "--out",
+             out.string(), "--threads", "2", "--save-all", "--set", "tets.edge_length=0.04", "--set",
+             "rotate.iterations=50", "--set", "segment.hex_edge_length=0.015", "--set", "polycube.edge_length=0.015"},
+            log);
   const auto t0 = Clock::now();
   bool exited_early = false;
   while (!fs::exists(out / marker)) {

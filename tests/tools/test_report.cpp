@@ -1,20 +1,20 @@
 // `polyhex run --html` and `polyhex report` end to end: the page in headless Chromium (tools/headless_page.sh,
 // the command that made docs/report.png) loads offline without an error, its screenshot shows the mesh, and
 // its numbers are report.json's. Without Chromium the test fails under CI=true and is skipped elsewhere.
+#include "tests/helpers/cli.h"
+#include "tests/helpers/png.h"
+
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
 #include <string>
-
-#include "tests/helpers/cli.h"
-#include "tests/helpers/png.h"
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
@@ -28,13 +28,15 @@ std::string source(const std::string& rel) { return std::string(POLYHEX_SOURCE_D
 
 /// tools/headless_page.sh MODE PAGE [OUT]: stdout in `out`, Chromium's log in `err`.
 CliRun headless(const std::string& mode, const fs::path& page, const fs::path& dir, const std::string& extra = "") {
-  return polyhex::test::run_command_to_files(source("tools/headless_page.sh") + " " + mode + " '" + page.string() + "' " + extra,
-                                             dir / (mode + ".out"), dir / (mode + ".err"));
+  return polyhex::test::run_command_to_files(
+      source("tools/headless_page.sh") + " " + mode + " '" + page.string() + "' " + extra, dir / (mode + ".out"),
+      dir / (mode + ".err"));
 }
 
 /// Whether Chromium can run here; false (with a warning) outside CI when it is missing, a failure in CI.
 bool have_chromium() {
-  if (std::system("command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1") == 0) return true;
+  if (std::system("command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1") == 0)
+    return true;
   const char* ci = std::getenv("CI");
   if (ci && std::string(ci) == "true") FAIL("chromium is missing (tools/setup.sh installs it; CI=true)");
   WARN("chromium is missing: the report's browser test is skipped (install chromium, or tools/setup.sh)");
@@ -59,7 +61,8 @@ long sum_counts(const std::string& svg) {
 
 }  // namespace
 
-TEST_CASE("report: the page in headless Chromium shows the mesh and report.json's numbers, offline", "[report][chromium]") {
+TEST_CASE("report: the page in headless Chromium shows the mesh and report.json's numbers, offline",
+          "[report][chromium]") {
   fs::path out = polyhex::test::fresh_dir("report_page");
   // The default (PolyCube) config at small sizes, so that report.json has a retry block and the view a real mesh.
   CliRun r = run_polyhex("run " + source("configs/default.json") + " --out " + out.string() +
@@ -91,7 +94,8 @@ TEST_CASE("report: the page in headless Chromium shows the mesh and report.json'
   CHECK_THAT(dom.err, !Contains("Uncaught"));
 
   // Every figure of the quality node, with its value exactly and its text to the 4 digits shown.
-  const std::regex figure_re(R"re(<tr data-key="([^"]+)"><td>[^<]*</td><td class="value" data-value="([^"]*)">([^<]*)</td>)re");
+  const std::regex figure_re(
+      R"re(<tr data-key="([^"]+)"><td>[^<]*</td><td class="value" data-value="([^"]*)">([^<]*)</td>)re");
   int figures = 0;
   for (auto it = std::sregex_iterator(dom.out.begin(), dom.out.end(), figure_re); it != std::sregex_iterator(); ++it) {
     const std::string key = (*it)[1].str();
@@ -121,15 +125,19 @@ TEST_CASE("report: the page in headless Chromium shows the mesh and report.json'
   CHECK(sum_counts(dom.out.substr(sj_at, er_at - sj_at)) == q["hexes"].get<long>());
   CHECK(sum_counts(dom.out.substr(er_at, dom.out.find("</svg>", er_at) - er_at)) == q["hexes"].get<long>());
   std::smatch irr;
-  REQUIRE(std::regex_search(dom.out, irr, std::regex(R"re(id="irregular" data-count="(\d+)" data-used-vertices="(\d+)")re")));
-  CHECK(100.0 * std::stod(irr[1].str()) / std::stod(irr[2].str()) == Approx(q["irregular_pct"].get<double>()).epsilon(1e-12));
+  REQUIRE(std::regex_search(dom.out, irr,
+                            std::regex(R"re(id="irregular" data-count="(\d+)" data-used-vertices="(\d+)")re")));
+  CHECK(100.0 * std::stod(irr[1].str()) / std::stod(irr[2].str()) ==
+        Approx(q["irregular_pct"].get<double>()).epsilon(1e-12));
 
   // Retry attempts: one row each, with the attempt's figures; the rule's thresholds.
   REQUIRE(rep.contains("retry"));
   const json& attempts = rep["retry"]["attempts"];
-  const std::regex attempt_re(R"re(<tr data-attempt="(\d+)" class="[^"]*" data-inverted="([^"]*)" data-sj-min="([^"]*)")re");
+  const std::regex attempt_re(
+      R"re(<tr data-attempt="(\d+)" class="[^"]*" data-inverted="([^"]*)" data-sj-min="([^"]*)")re");
   size_t rows = 0;
-  for (auto it = std::sregex_iterator(dom.out.begin(), dom.out.end(), attempt_re); it != std::sregex_iterator(); ++it, ++rows) {
+  for (auto it = std::sregex_iterator(dom.out.begin(), dom.out.end(), attempt_re); it != std::sregex_iterator();
+       ++it, ++rows) {
     const json& a = attempts.at(std::stoul((*it)[1].str()));
     CHECK(json::parse((*it)[2].str()) == a["inverted"]);
     CHECK(json::parse((*it)[3].str()) == a["sj_min"]);
@@ -168,7 +176,8 @@ TEST_CASE("report: the page in headless Chromium shows the mesh and report.json'
   // gone (background where the top was) and the picture changes.
   CliRun clipped_dom = headless("dom", page.string() + "#clip=z,0.5", out);
   CHECK_THAT(clipped_dom.out, Contains("data-clip=\"z 0.5\"") && Contains("data-state=\"ready\""));
-  CliRun clipped = headless("screenshot", page.string() + "#clip=z,0.5", out, "'" + (out / "clipped.png").string() + "'");
+  CliRun clipped =
+      headless("screenshot", page.string() + "#clip=z,0.5", out, "'" + (out / "clipped.png").string() + "'");
   REQUIRE(clipped.code == 0);
   const polyhex::test::Image cut = polyhex::test::decode_png(polyhex::test::read_text(out / "clipped.png"));
   REQUIRE(cut.width == img.width);
@@ -198,7 +207,8 @@ TEST_CASE("report: a folder without report.json or without the mesh is refused, 
   CHECK_THAT(none.out, Contains((out / "report.json").string()) && Contains("missing"));
   CHECK_FALSE(fs::exists(out / "report.html"));
 
-  CliRun r = run_polyhex("run " + source("configs/baseline.json") + " --out " + out.string() + " --set tets.edge_length=0.12 --threads 2");
+  CliRun r = run_polyhex("run " + source("configs/baseline.json") + " --out " + out.string() +
+                         " --set tets.edge_length=0.12 --threads 2");
   REQUIRE(r.code == 0);
   fs::rename(out / "hex.vtk", out / "moved.vtk");
   CliRun nomesh = run_polyhex("report " + out.string());

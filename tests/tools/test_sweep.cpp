@@ -2,20 +2,19 @@
 // the sweep path in the message, sweep.csv / sweep.json / per-case folders, a failing case that does not
 // stop the others. Correct with and without the artefact cache: cache hits are only compared with the
 // cases' report.json, never required.
-#include <catch2/catch.hpp>
+#include "tests/helpers/cli.h"
 
-#include <signal.h>
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
-#include <nlohmann/json.hpp>
-#include <thread>
+#include <signal.h>
 #include <string>
+#include <thread>
+#include <unistd.h>
 #include <vector>
-
-#include "tests/helpers/cli.h"
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
@@ -49,10 +48,14 @@ std::vector<std::vector<std::string>> read_csv(const fs::path& p) {
     bool quoted = false;
     for (size_t i = 0; i < line.size(); ++i) {
       const char c = line[i];
-      if (quoted && c == '"' && i + 1 < line.size() && line[i + 1] == '"') cell += '"', ++i;
-      else if (c == '"') quoted = !quoted;
-      else if (c == ',' && !quoted) cells.push_back(cell), cell.clear();
-      else cell += c;
+      if (quoted && c == '"' && i + 1 < line.size() && line[i + 1] == '"')
+        cell += '"', ++i;
+      else if (c == '"')
+        quoted = !quoted;
+      else if (c == ',' && !quoted)
+        cells.push_back(cell), cell.clear();
+      else
+        cell += c;
     }
     cells.push_back(cell);
     rows.push_back(cells);
@@ -75,9 +78,15 @@ fs::path baseline_sweep(const fs::path& dir, const json& sweep_value, const json
   json cfg = {{"sweep", sweep_value},
               {"nodes",
                {{{"id", "surface"}, {"type", "read_surface"}, {"params", {{"path", kCube}}}},
-                {{"id", "tets"}, {"type", "tetrahedralize/tetgen"}, {"params", {{"edge_length", 0.12}}}, {"inputs", {{"surface", "surface"}}}},
+                {{"id", "tets"},
+                 {"type", "tetrahedralize/tetgen"},
+                 {"params", {{"edge_length", 0.12}}},
+                 {"inputs", {{"surface", "surface"}}}},
                 {{"id", "hex"}, {"type", "hex_from_tets/split"}, {"inputs", {{"tets", "tets"}}}},
-                {{"id", "quality"}, {"type", "quality"}, {"params", {{"samples", 2000}}}, {"inputs", {{"mesh", "hex"}, {"surface", "surface"}}}}}}};
+                {{"id", "quality"},
+                 {"type", "quality"},
+                 {"params", {{"samples", 2000}}},
+                 {"inputs", {{"mesh", "hex"}, {"surface", "surface"}}}}}}};
   if (!retry.is_null()) cfg["retry"] = retry;
   const fs::path p = dir / "sweep.config.json";
   std::ofstream(p) << cfg.dump(2);
@@ -147,18 +156,23 @@ TEST_CASE("sweep: invalid sweeps are config errors naming the path (exit 2, noth
     std::string message;
   };
   const std::vector<Bad> bad = {
-      {{{"nope.edge_length", {0.1}}}, "sweep.\"nope.edge_length\": no node with id `nope`; ids: surface, tets, hex, quality"},
-      {{{"tets.edge", {0.1}}}, "sweep.\"tets.edge\": node `tets` (`tetrahedralize/tetgen`) has no param `edge`; params: edge_length"},
-      {{{"tets.edge_length", {0.1, 7}}}, "sweep.\"tets.edge_length\"[1] = 7: node `tets` (`tetrahedralize/tetgen`): param `edge_length`"},
+      {{{"nope.edge_length", {0.1}}},
+       "sweep.\"nope.edge_length\": no node with id `nope`; ids: surface, tets, hex, quality"},
+      {{{"tets.edge", {0.1}}},
+       "sweep.\"tets.edge\": node `tets` (`tetrahedralize/tetgen`) has no param `edge`; params: edge_length"},
+      {{{"tets.edge_length", {0.1, 7}}},
+       "sweep.\"tets.edge_length\"[1] = 7: node `tets` (`tetrahedralize/tetgen`): param `edge_length`"},
       {{{"tets.edge_length", {0.1, 0.1}}}, "sweep.\"tets.edge_length\"[1]: value 0.1 is listed twice"},
       {{{"tets.edge_length", json::array()}}, "sweep.\"tets.edge_length\": an axis is a non-empty array of values"},
       {{{"tets.edge_length", 0.1}}, "sweep.\"tets.edge_length\": an axis is a non-empty array of values, got 0.1"},
       {{{"edge_length", {0.1}}}, "sweep.\"edge_length\": `edge_length` is not `<node id>.<param>`"},
       {json::object(), "sweep: an object of axes"},
-      {{{"cases", {{{"name", "a"}, {"set", {{"tets.edge_length", 0.1}}}, {"note", 1}}}}}, "sweep.cases[0]: unknown key `note`; valid keys: name, set"},
+      {{{"cases", {{{"name", "a"}, {"set", {{"tets.edge_length", 0.1}}}, {"note", 1}}}}},
+       "sweep.cases[0]: unknown key `note`; valid keys: name, set"},
       {{{"cases", {{{"name", "a"}}, {{"name", "a"}}}}}, "sweep.cases[1]: duplicate case name `a`"},
       {{{"cases", {{{"name", "a/b"}}}}}, "sweep.cases[0]: case name `a/b` must use letters, digits"},
-      {{{"cases", {{{"name", "a"}, {"set", {{"hex.x", 1}}}}}}}, "sweep.cases[0].set.\"hex.x\": node `hex` (`hex_from_tets/split`) has no param `x`"},
+      {{{"cases", {{{"name", "a"}, {"set", {{"hex.x", 1}}}}}}},
+       "sweep.cases[0].set.\"hex.x\": node `hex` (`hex_from_tets/split`) has no param `x`"},
       {{{"cases", {{{"name", "a"}, {"set", {{"quality.samples", "many"}}}}}}},
        "sweep.cases[0].set.\"quality.samples\" = \"many\": node `quality` (`quality/default`): param `samples`"},
       {{{"cases", json::array()}, {"tets.edge_length", {0.1}}}, "sweep: `cases` cannot be combined with axes"},
@@ -189,14 +203,14 @@ TEST_CASE("sweep: the edge-length sweep writes sweep.csv, sweep.json and one fol
   const std::vector<std::string> names = {"polycube.edge_length+segment.hex_edge_length=0.06",
                                           "polycube.edge_length+segment.hex_edge_length=0.045",
                                           "polycube.edge_length+segment.hex_edge_length=0.03"};
-  const std::vector<std::string> ids = {"surface", "tets", "rotate", "segment", "polycube",
-                                        "hex", "pad", "pad_peeled", "optimize", "quality", "write"};
+  const std::vector<std::string> ids = {"surface", "tets",       "rotate",   "segment", "polycube", "hex",
+                                        "pad",     "pad_peeled", "optimize", "quality", "write"};
   // CSV: header, one row per case in case order.
   auto rows = read_csv(out / "sweep.csv");
   REQUIRE(rows.size() == 4);
-  std::vector<std::string> expected = {"case", "status", "polycube.edge_length", "segment.hex_edge_length", "hexes",
-                                       "inverted", "sj_min", "sj_avg", "irregular_pct", "hausdorff_mean",
-                                       "hausdorff_max", "seconds"};
+  std::vector<std::string> expected = {
+      "case",   "status", "polycube.edge_length", "segment.hex_edge_length", "hexes",         "inverted",
+      "sj_min", "sj_avg", "irregular_pct",        "hausdorff_mean",          "hausdorff_max", "seconds"};
   for (auto& id : ids) expected.push_back(id + ".seconds");
   for (auto& id : ids) expected.push_back(id + ".cache_hit");
   expected.push_back("exit_code");
@@ -263,8 +277,8 @@ TEST_CASE("sweep: the edge-length sweep writes sweep.csv, sweep.json and one fol
 TEST_CASE("sweep: the anchor-weight x feature-angle sweep runs every case", "[sweep]") {
   const fs::path dir = scratch("rotation"), out = dir / "out";
   CliRun r = sweep(config("rotation.json") + " --out " + out.string() + " --jobs 2" + kCoarse +
-                    " --set segment.hex_edge_length=0.06 --set polycube.edge_length=0.06",
-                dir);
+                       " --set segment.hex_edge_length=0.06 --set polycube.edge_length=0.06",
+                   dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
   const json s = json::parse(read_text(out / "sweep.json"));
@@ -289,10 +303,11 @@ TEST_CASE("sweep: the anchor-weight x feature-angle sweep runs every case", "[sw
 
 TEST_CASE("sweep: a failing case is reported, the others still run, the exit code says so", "[sweep]") {
   const fs::path dir = scratch("failing"), out = dir / "out";
-  const fs::path cfg = baseline_sweep(dir, {{"cases",
-                                             {{{"name", "box"}, {"set", json::object()}},
-                                              {{"name", "missing"}, {"set", {{"surface.path", "/nonexistent/part.off"}}}},
-                                              {{"name", "coarser"}, {"set", {{"tets.edge_length", 0.2}}}}}}});
+  const fs::path cfg =
+      baseline_sweep(dir, {{"cases",
+                            {{{"name", "box"}, {"set", json::object()}},
+                             {{"name", "missing"}, {"set", {{"surface.path", "/nonexistent/part.off"}}}},
+                             {{"name", "coarser"}, {"set", {{"tets.edge_length", 0.2}}}}}}});
   // A report left by an earlier sweep in the failing case's folder must not pass for this run's.
   fs::create_directories(out / "missing");
   std::ofstream(out / "missing" / "report.json") << R"({"status": "ok", "nodes": {}})";
@@ -339,12 +354,14 @@ TEST_CASE("sweep: SIGTERM stops the running cases at a safe point, starts no mor
   if (pid == 0) {
     std::freopen((dir / "stderr.txt").c_str(), "w", stderr);
     std::freopen((dir / "stdout.txt").c_str(), "w", stdout);
-    ::execl(POLYHEX_BINARY, POLYHEX_BINARY, "sweep", config("rotation.json").c_str(), "--out", out.c_str(), "--jobs", "1",
-            "--threads", "1", "--set", "surface.resolution=24", "--set", "tets.edge_length=0.06", static_cast<char*>(nullptr));
+    ::execl(POLYHEX_BINARY, POLYHEX_BINARY, "sweep", config("rotation.json").c_str(), "--out", out.c_str(), "--jobs",
+            "1", "--threads", "1", "--set", "surface.resolution=24", "--set", "tets.edge_length=0.06",
+            static_cast<char*>(nullptr));
     ::_exit(127);
   }
   // Wait until the first case runs, then stop the sweep (its children are in their own process group).
-  for (int k = 0; k < 300 && !fs::exists(out / first / "log.txt"); ++k) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  for (int k = 0; k < 300 && !fs::exists(out / first / "log.txt"); ++k)
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   ::kill(pid, SIGTERM);
   int status = 0;

@@ -1,5 +1,9 @@
 // [chart-order] the order evidence of same-axis charts (chart_order.h) and the structure extraction's
 // order-cycle cuts (polycube_segment.h) on generated meshes.
+#include "nodes/algorithms/chart_order.h"
+#include "nodes/polycube_segment/polycube_segment.h"
+#include "tests/helpers/segment_fixtures.h"
+
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -7,10 +11,6 @@
 #include <cstdint>
 #include <numeric>
 #include <stdexcept>
-
-#include "nodes/algorithms/chart_order.h"
-#include "nodes/polycube_segment/polycube_segment.h"
-#include "tests/helpers/segment_fixtures.h"
 
 using namespace polyhex;
 using namespace polyhex::test;
@@ -126,7 +126,8 @@ TEST_CASE("place_levels keeps every order one level apart and moves the groups l
       for (int g = 0; g < n; ++g)  // groups are in topological order
         for (int hi : acc.up[g]) push[hi] = std::max(push[hi], push[g] + 1);
       double cost = 0, cost_push = 0;
-      for (int g = 0; g < n; ++g) cost += w[g] * (k[g] - t[g]) * (k[g] - t[g]), cost_push += w[g] * (push[g] - t[g]) * (push[g] - t[g]);
+      for (int g = 0; g < n; ++g)
+        cost += w[g] * (k[g] - t[g]) * (k[g] - t[g]), cost_push += w[g] * (push[g] - t[g]) * (push[g] - t[g]);
       CHECK(cost <= cost_push + 1e-9 + 0.25 * std::accumulate(w.begin(), w.end(), 0.0));  // up to the rounding's share
     }
   }
@@ -203,9 +204,9 @@ TEST_CASE("cycle_cuts: a group whose part near the group below sits above its pa
     smp.delta = smp.q_at - smp.p_at;
     o.distance_samples.push_back(smp);
   };
-  add(0, 1.0, 1, 3.0);   // 0 at 1 below 1 at 3
-  add(1, 5.0, 2, 9.0);   // 1 at 5 below 2 at 9
-  add(2, 2.0, 0, 0.5);   // 2 at 2 "below" 0 at 0.5: the contradiction
+  add(0, 1.0, 1, 3.0);  // 0 at 1 below 1 at 3
+  add(1, 5.0, 2, 9.0);  // 1 at 5 below 2 at 9
+  add(2, 2.0, 0, 0.5);  // 2 at 2 "below" 0 at 0.5: the contradiction
   std::sort(o.distance_samples.begin(), o.distance_samples.end(),
             [](const auto& x, const auto& y) { return std::make_pair(x.p, x.q) < std::make_pair(y.p, y.q); });
   const std::vector<int> cycle{0, 1, 2};  // 0 < 1 < 2, and the dropped pair 2 < 0 closes it

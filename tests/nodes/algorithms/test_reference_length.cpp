@@ -1,10 +1,10 @@
-#include <catch2/catch.hpp>
-
-#include <cmath>
-
 #include "nodes/algorithms/reference_length.h"
 #include "nodes/algorithms/shapes.h"
 #include "tests/helpers/rotations.h"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
 
 using namespace polyhex;
 

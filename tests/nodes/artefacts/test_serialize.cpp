@@ -1,12 +1,12 @@
 // Binary codecs of the five artefact types (nodes/artefacts/serialize.h): exact round trips through the
 // registry's codecs, and malformed payloads rejected with a message.
+#include "graph/node.h"
+#include "nodes/artefacts/serialize.h"
+
 #include <catch2/catch.hpp>
 
 #include <cstring>
 #include <sstream>
-
-#include "graph/node.h"
-#include "nodes/artefacts/serialize.h"
 
 using namespace polyhex;
 using Catch::Matchers::Contains;
@@ -260,8 +260,8 @@ TEST_CASE("serialize: a hex mesh's boundary groups round-trip exactly; bad group
 
   HexMesh bad = h;
   bad.groups[1].faces.push_back({0, 6});
-  CHECK_THROWS_WITH(decode<HexMesh>(encode(bad)), Contains("HexMesh payload") && Contains("`chart_7`") &&
-                                                      Contains("face (0, 6) out of range"));
+  CHECK_THROWS_WITH(decode<HexMesh>(encode(bad)),
+                    Contains("HexMesh payload") && Contains("`chart_7`") && Contains("face (0, 6) out of range"));
   bad = h;
   bad.groups[1].name = "boundary";
   CHECK_THROWS_WITH(decode<HexMesh>(encode(bad)), Contains("the name is used twice"));

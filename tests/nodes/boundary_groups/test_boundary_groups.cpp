@@ -1,15 +1,15 @@
 // Boundary groups of a hex mesh (nodes/boundary_groups): the whole boundary, one group per PolyCube chart
 // and one per sharp-edge patch, checked on the exact PolyCube map of an L-shaped voxel block.
-#include <catch2/catch.hpp>
-
-#include <set>
-
+#include "nodes/algorithms/hex_quality.h"
 #include "nodes/artefacts/boundary_groups.h"
 #include "nodes/boundary_groups/boundary_groups.h"
 #include "nodes/hex_extract/hex_extract.h"
-#include "nodes/algorithms/hex_quality.h"
 #include "runtime/errors.h"
 #include "tests/helpers/voxel_maps.h"
+
+#include <catch2/catch.hpp>
+
+#include <set>
 
 using namespace polyhex;
 using Catch::Matchers::Contains;
@@ -34,7 +34,8 @@ TEST_CASE("boundary_groups: boundary, charts and patches of an L block's lattice
   CHECK(boundary_groups_problem(out).empty());
 
   const long expected_faces = hex_boundary_quads(hexes).rows();
-  CHECK(expected_faces == 4 * (3 + 3 + 8));  // L of three unit voxels: area 14 (top, bottom, sides), 4 faces per unit square
+  CHECK(expected_faces ==
+        4 * (3 + 3 + 8));  // L of three unit voxels: area 14 (top, bottom, sides), 4 faces per unit square
   CHECK(s.boundary_faces == expected_faces);
   const size_t charts = map.segmentation->charts.size();
   CHECK(charts == 8);  // the L's eight planar sides

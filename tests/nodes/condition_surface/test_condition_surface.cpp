@@ -1,21 +1,21 @@
 // Surface conditioning: diagnosis counts on generated defective surfaces, each repair, the
 // refusals, pass-through bit for bit, the remesh to size, and the whole pipeline on every kind of
 // defective input (no inverted hex).
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/algorithms/shapes.h"
+#include "nodes/condition_surface/condition_surface.h"
+#include "nodes/condition_surface/surface_ops.h"
+#include "nodes/formats/surface_io.h"
+#include "nodes/tetrahedralize/tetgen.h"
+#include "runtime/errors.h"
+#include "tests/helpers/cli.h"
+
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <fstream>
 #include <map>
-#include <nlohmann/json.hpp>
-
-#include "nodes/condition_surface/condition_surface.h"
-#include "nodes/condition_surface/surface_ops.h"
-#include "nodes/formats/surface_io.h"
-#include "nodes/algorithms/hex_quality.h"
-#include "nodes/algorithms/shapes.h"
-#include "nodes/tetrahedralize/tetgen.h"
-#include "runtime/errors.h"
-#include "tests/helpers/cli.h"
 
 using namespace polyhex;
 using Catch::Matchers::Contains;
@@ -203,7 +203,6 @@ TEST_CASE("condition_surface: a clean input at the tet size passes through bit f
 }
 
 TEST_CASE("condition_surface: each repair leaves a clean surface close to the original", "[condition]") {
-
   ConditionParams p;
   auto check_repair = [&](const SurfaceMesh& in, SurfaceRepair variant, const std::string& expected_repair) {
     REQUIRE_FALSE(clean(in));
@@ -361,7 +360,8 @@ TEST_CASE("quality against an open original: one-sided distances", "[condition][
   Eigen::Index n = 0;
   SurfaceMesh open = b;
   for (Eigen::Index f = 0; f < b.F.rows(); ++f)
-    if (!(b.V(b.F(f, 0), 2) > 0.999 && b.V(b.F(f, 1), 2) > 0.999 && b.V(b.F(f, 2), 2) > 0.999)) open.F.row(n++) = b.F.row(f);
+    if (!(b.V(b.F(f, 0), 2) > 0.999 && b.V(b.F(f, 1), 2) > 0.999 && b.V(b.F(f, 2), 2) > 0.999))
+      open.F.row(n++) = b.F.row(f);
   open.F.conservativeResize(n, 3);
   const HexQuality q = hex_quality(h, &open);
   CHECK_FALSE(q.surface_closed);

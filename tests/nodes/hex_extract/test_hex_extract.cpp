@@ -1,12 +1,12 @@
 // Hex extraction from PolyCube maps (§6): exact grids from exact PolyCubes, sheared inputs, the
 // overlapping map of Fig. 9, named errors.
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/hex_extract/hex_extract.h"
+#include "tests/helpers/voxel_maps.h"
+
 #include <catch2/catch.hpp>
 
 #include <set>
-
-#include "nodes/hex_extract/hex_extract.h"
-#include "nodes/algorithms/hex_quality.h"
-#include "tests/helpers/voxel_maps.h"
 
 using namespace polyhex;
 
@@ -52,9 +52,7 @@ void check_exact_grid(const std::vector<std::array<int, 3>>& voxels, int per_vox
 
 }  // namespace
 
-TEST_CASE("exact PolyCube of a box gives exactly the grid", "[hex]") {
-  check_exact_grid(test::voxel_box(3, 2, 2), 2);
-}
+TEST_CASE("exact PolyCube of a box gives exactly the grid", "[hex]") { check_exact_grid(test::voxel_box(3, 2, 2), 2); }
 
 TEST_CASE("exact PolyCube of an L-block and a C-shape gives exactly the grid", "[hex]") {
   check_exact_grid({{0, 0, 0}, {1, 0, 0}, {0, 0, 1}}, 3);

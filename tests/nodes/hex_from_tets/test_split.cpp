@@ -1,12 +1,12 @@
+#include "graph/node.h"
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/hex_from_tets/split.h"
+#include "tests/helpers/hex_fixtures.h"
+
 #include <catch2/catch.hpp>
 
 #include <array>
 #include <set>
-
-#include "graph/node.h"
-#include "nodes/hex_from_tets/split.h"
-#include "nodes/algorithms/hex_quality.h"
-#include "tests/helpers/hex_fixtures.h"
 
 using namespace polyhex;
 using namespace polyhex::test;
@@ -27,7 +27,9 @@ double tet_volume(const TetMesh& t) {
   double v = 0;
   for (Eigen::Index i = 0; i < t.T.rows(); ++i) {
     const Eigen::Vector3d a = t.V.row(t.T(i, 0));
-    v += (t.V.row(t.T(i, 1)).transpose() - a).cross(t.V.row(t.T(i, 2)).transpose() - a).dot(t.V.row(t.T(i, 3)).transpose() - a);
+    v += (t.V.row(t.T(i, 1)).transpose() - a)
+             .cross(t.V.row(t.T(i, 2)).transpose() - a)
+             .dot(t.V.row(t.T(i, 3)).transpose() - a);
   }
   return v / 6;
 }

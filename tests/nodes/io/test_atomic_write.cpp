@@ -1,21 +1,20 @@
 // write_file_atomic and the mesh writers under output faults: a failing stream, a full disk (a file
 // size limit), a name clash with a folder, a parent that is a file, an unwritable folder. Nothing is
 // ever left under the final name and no temporary file is left behind.
-#include <catch2/catch.hpp>
-
-#include <sys/resource.h>
-#include <unistd.h>
-
-#include <csignal>
-#include <filesystem>
-#include <fstream>
-#include <iterator>
-
 #include "nodes/formats/hexmesh_io.h"
 #include "nodes/formats/surface_io.h"
 #include "runtime/atomic_file.h"
 #include "runtime/errors.h"
 #include "tests/helpers/io_checks.h"
+
+#include <catch2/catch.hpp>
+#include <sys/resource.h>
+
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <unistd.h>
 
 using namespace polyhex;
 using namespace polyhex::iotest;
@@ -61,17 +60,19 @@ TEST_CASE("write_file_atomic: a failing fill leaves nothing, an existing file is
   const fs::path p = dir / "out.txt";
   write_text(p, "old content\n");
   SECTION("fill throws") {
-    REQUIRE_THROWS_WITH(write_file_atomic(p, [](std::ostream& os) {
-                          os << "half";
-                          throw InvalidInput("stop");
-                        }),
+    REQUIRE_THROWS_WITH(write_file_atomic(p,
+                                          [](std::ostream& os) {
+                                            os << "half";
+                                            throw InvalidInput("stop");
+                                          }),
                         "stop");
   }
   SECTION("the stream fails (as on a full disk)") {
-    REQUIRE_THROWS_AS(write_file_atomic(p, [](std::ostream& os) {
-                        os << "half";
-                        os.setstate(std::ios::badbit);
-                      }),
+    REQUIRE_THROWS_AS(write_file_atomic(p,
+                                        [](std::ostream& os) {
+                                          os << "half";
+                                          os.setstate(std::ios::badbit);
+                                        }),
                       IOError);
     REQUIRE_THROWS_WITH(write_file_atomic(p, [](std::ostream& os) { os.setstate(std::ios::failbit); }),
                         Contains(p.string() + ": write failed") && Contains("no file written"));

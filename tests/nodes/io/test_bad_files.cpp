@@ -1,15 +1,15 @@
 // Bad input files not covered by the format tests (test_surface_io / test_volume_io): empty files,
 // files of another format, non-finite values in the remaining formats, non-orientable and
 // multi-component surfaces, overlapping or touching tets.
-#include <catch2/catch.hpp>
-
-#include <cstring>
-#include <limits>
-
 #include "nodes/formats/surface_io.h"
 #include "nodes/formats/tetmesh_io.h"
 #include "runtime/errors.h"
 #include "tests/helpers/io_checks.h"
+
+#include <catch2/catch.hpp>
+
+#include <cstring>
+#include <limits>
 
 using namespace polyhex;
 using namespace polyhex::iotest;
@@ -53,14 +53,16 @@ TEST_CASE("read_surface: empty files and files of another format", "[io][badinpu
       {"empty.ply", "", "empty.ply: empty file"},
       {"blank.obj", " \n\n\t\n", "blank.obj: empty file"},
       // An ASCII STL renamed .obj: no OBJ statement at all.
-      {"stl.obj", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\n"
-                  "endfacet\nendsolid t\n",
+      {"stl.obj",
+       "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\n"
+       "endfacet\nendsolid t\n",
        "stl.obj: no faces (`f` lines) and no vertices (`v` lines): not an OBJ file?"},
       {"points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n", "points.obj: no faces (`f` lines)"},
       {"stl.off", "solid t\nendsolid t\n", "stl.off: line 1: not an OFF file (expected the header `OFF`, got `solid`)"},
       {"off.ply", "OFF\n4 4 0\n", "off.ply"},
       {"off.stl", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n" + kTetFaces, "off.stl"},
-      {"nan.ply", kPlyHead + "0 0 0\n1 nan 0\n0 1 0\n0 0 1\n" + kTetFaces, "nan.ply: vertex 1 has a non-finite coordinate"},
+      {"nan.ply", kPlyHead + "0 0 0\n1 nan 0\n0 1 0\n0 0 1\n" + kTetFaces,
+       "nan.ply: vertex 1 has a non-finite coordinate"},
       {"inf.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 -inf 0\n",
        "inf.stl: line 5: vertex has a non-finite coordinate (`-inf`)"},
       {"neg.ply", kPlyHead + "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 -1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n",
@@ -94,7 +96,8 @@ TEST_CASE("read_surface: a closed non-orientable surface is refused", "[io][badi
     s += std::string("f ") + f + "\n";
   auto p = write_text(dir / "rp2.obj", s);
   REQUIRE_THROWS_AS(read_surface(p), InvalidInput);
-  REQUIRE_THROWS_WITH(read_surface(p), Contains(p.string() + ": surface is not orientable (no consistent orientation exists)"));
+  REQUIRE_THROWS_WITH(read_surface(p),
+                      Contains(p.string() + ": surface is not orientable (no consistent orientation exists)"));
 }
 
 TEST_CASE("read_surface: several components are meshed, with a warning", "[io][badinput]") {
@@ -123,16 +126,24 @@ TEST_CASE("read_tetmesh: overlapping tets and a boundary that is not a manifold 
   };
   const std::vector<Case> cases = {
       // Three tets on the face (0 1 2): two above it, one below.
-      {"three.mesh", {{0.2, 0.2, 0.5}, {0.3, 0.3, -1}}, {{0, 1, 2, 3}, {0, 1, 2, 4}, {0, 1, 2, 5}},
+      {"three.mesh",
+       {{0.2, 0.2, 0.5}, {0.3, 0.3, -1}},
+       {{0, 1, 2, 3}, {0, 1, 2, 4}, {0, 1, 2, 5}},
        "three.mesh: face (0, 1, 2) is shared by 3 tets (0, 1, 2, ...): the tets overlap"},
       // Two tets on the same side of their shared face.
-      {"fold.mesh", {{0.2, 0.2, 0.5}}, {{0, 1, 2, 3}, {0, 1, 2, 4}},
+      {"fold.mesh",
+       {{0.2, 0.2, 0.5}},
+       {{0, 1, 2, 3}, {0, 1, 2, 4}},
        "fold.mesh: tets 0 and 1 lie on the same side of their shared face (0, 1, 2): the tets overlap"},
       // Two tets sharing only the edge 0-1: the boundary is closed but that edge is in 4 faces.
-      {"edge.mesh", {{0, -1, 0}, {0, 0, -1}}, {{0, 1, 2, 3}, {0, 1, 5, 4}},
+      {"edge.mesh",
+       {{0, -1, 0}, {0, 0, -1}},
+       {{0, 1, 2, 3}, {0, 1, 5, 4}},
        "edge.mesh: boundary: non-manifold: 1 edges are used by more than 2 triangles"},
       // Two tets sharing only vertex 0: a pinch point.
-      {"pinch.mesh", {{-1, 0, 0}, {0, -1, 0}, {0, 0, -1}}, {{0, 1, 2, 3}, {0, 4, 6, 5}},
+      {"pinch.mesh",
+       {{-1, 0, 0}, {0, -1, 0}, {0, 0, -1}},
+       {{0, 1, 2, 3}, {0, 4, 6, 5}},
        "pinch.mesh: boundary: non-manifold vertex (0.000000, 0.000000, 0.000000)"},
   };
   for (const auto& c : cases) {
@@ -146,8 +157,8 @@ TEST_CASE("read_tetmesh: overlapping tets and a boundary that is not a manifold 
   }
   SECTION("an inverted tet is re-oriented, a zero-volume one refused, a valid mesh counts its boundary") {
     // Tet 1 inverted: re-oriented, and then the two tets are on opposite sides of their face.
-    auto p = write_text(dir / "inv.mesh", medit({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}},
-                                                {{0, 1, 2, 3}, {1, 3, 2, 4}}));
+    auto p = write_text(dir / "inv.mesh",
+                        medit({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}}, {{0, 1, 2, 3}, {1, 3, 2, 4}}));
     TetReadReport r;
     TetMesh m = read_tetmesh(p, &r);
     CHECK(r.reoriented == 1);

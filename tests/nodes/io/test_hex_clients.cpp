@@ -2,19 +2,19 @@
 // each of .e, .inp, .msh, .vtk, .mesh (tests/nodes/io/clients/read_back.py says how each format's groups
 // reach it), the gmsh CLI opens the .msh and writes it back. The clients are installed by tools/setup.sh:
 // under CI (CI=true) a missing client fails the test; elsewhere it is skipped with a warning.
+#include "nodes/formats/hexmesh_io.h"
+#include "tests/helpers/cli.h"
+#include "tests/helpers/io_checks.h"
+#include "tests/helpers/report.h"
+
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <nlohmann/json.hpp>
 #include <string>
-
-#include "nodes/formats/hexmesh_io.h"
-#include "tests/helpers/cli.h"
-#include "tests/helpers/report.h"
-#include "tests/helpers/io_checks.h"
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
@@ -33,13 +33,15 @@ bool client_available(const std::string& probe, const std::string& what) {
   const CliRun r = run_command(probe + " >/dev/null 2>&1");
   if (r.code == 0) return true;
   const char* ci = std::getenv("CI");
-  if (ci && std::string(ci) == "true") FAIL(what << " is missing (tools/setup.sh installs it); `" << probe << "` failed");
+  if (ci && std::string(ci) == "true")
+    FAIL(what << " is missing (tools/setup.sh installs it); `" << probe << "` failed");
   WARN("skipped: " << what << " is missing (`" << probe << "` failed); tools/setup.sh installs it");
   return false;
 }
 
 bool meshio_available() {
-  return client_available(std::string(kPython) + " -c 'import meshio, netCDF4'", "meshio with netCDF4 (python3-meshio)");
+  return client_available(std::string(kPython) + " -c 'import meshio, netCDF4'",
+                          "meshio with netCDF4 (python3-meshio)");
 }
 
 /// What read_back.py finds in `file` (the JSON of its last output line).
@@ -51,7 +53,8 @@ json read_back(const fs::path& file) {
   const size_t end = r.out.find_last_not_of("\n");
   REQUIRE(end != std::string::npos);
   const size_t start = r.out.rfind('\n', end);
-  return json::parse(r.out.substr(start == std::string::npos ? 0 : start + 1, end + 1 - (start == std::string::npos ? 0 : start + 1)));
+  return json::parse(
+      r.out.substr(start == std::string::npos ? 0 : start + 1, end + 1 - (start == std::string::npos ? 0 : start + 1)));
 }
 
 /// The default pipeline on shape:box at a coarse size, its mesh written in every format (once per process).

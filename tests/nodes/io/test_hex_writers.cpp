@@ -1,10 +1,5 @@
 // The hex writers with boundary groups (hexmesh_io.h, solver_formats.h): face numbering per format, what
 // each format holds, atomic writes and refused input. Read-back by real clients: test_hex_clients.cpp.
-#include <catch2/catch.hpp>
-
-#include <filesystem>
-#include <thread>
-
 #include "nodes/artefacts/boundary_groups.h"
 #include "nodes/formats/hexmesh_io.h"
 #include "nodes/formats/solver_formats.h"
@@ -12,10 +7,15 @@
 #include "runtime/errors.h"
 #include "tests/helpers/io_checks.h"
 
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <thread>
+
 using namespace polyhex;
 using namespace polyhex::iotest;
-using polyhex::test::read_text;
 using Catch::Matchers::Contains;
+using polyhex::test::read_text;
 namespace fs = std::filesystem;
 
 namespace {
@@ -73,8 +73,8 @@ TEST_CASE("hex writers: bad groups, unknown formats and failed writes leave no f
   HexMesh m = hex_grid_with_side_groups(2);
   m.groups[0].faces.push_back({8, 0});  // hex 8 does not exist
   for (const char* name : {"b.vtk", "b.mesh", "b.msh", "b.e", "b.inp"}) {
-    CHECK_THROWS_WITH(write_hexmesh(m, dir / name),
-                      Contains(name) && Contains("`boundary`") && Contains("out of range") && Contains("no file written"));
+    CHECK_THROWS_WITH(write_hexmesh(m, dir / name), Contains(name) && Contains("`boundary`") &&
+                                                        Contains("out of range") && Contains("no file written"));
     CHECK_FALSE(fs::exists(dir / name));
   }
   m = hex_grid_with_side_groups(2);
@@ -86,7 +86,8 @@ TEST_CASE("hex writers: bad groups, unknown formats and failed writes leave no f
   CHECK_THROWS_AS(write_tetmesh(two_tets(), dir / "t.e"), IOError);  // Exodus and Abaqus are for hexes
   CHECK_THROWS_AS(write_tetmesh(two_tets(), dir / "t.vtk", "exodus"), ConfigError);
   // the Exodus library cannot create a file in a missing folder: an error naming the file, nothing left
-  CHECK_THROWS_WITH(write_hexmesh(m, dir / "missing" / "b.e"), Contains("b.e") && Contains("Exodus II library: ex_create"));
+  CHECK_THROWS_WITH(write_hexmesh(m, dir / "missing" / "b.e"),
+                    Contains("b.e") && Contains("Exodus II library: ex_create"));
   CHECK_FALSE(leftovers(dir.path));
   // an existing file is replaced whole, or kept when the write fails
   write_hexmesh(m, dir / "keep.e");
@@ -111,6 +112,7 @@ TEST_CASE("hex writers: Exodus files written from several threads at once are wh
     });
   for (auto& t : threads) t.join();
   for (int t = 0; t < 4; ++t)
-    for (int k = 0; k < 5; ++k) CHECK(read_text(dir / ("t" + std::to_string(t) + "_" + std::to_string(k) + ".e")) == ref);
+    for (int k = 0; k < 5; ++k)
+      CHECK(read_text(dir / ("t" + std::to_string(t) + "_" + std::to_string(k) + ".e")) == ref);
   CHECK_FALSE(leftovers(dir.path));
 }

@@ -1,10 +1,10 @@
-#include <catch2/catch.hpp>
-
 #include "graph/node.h"
 #include "nodes/formats/hexmesh_io.h"
 #include "nodes/formats/surface_io.h"
 #include "nodes/formats/tetmesh_io.h"
 #include "tests/helpers/io_checks.h"
+
+#include <catch2/catch.hpp>
 
 using namespace polyhex;
 using namespace polyhex::iotest;

@@ -1,10 +1,10 @@
-#include <catch2/catch.hpp>
-
-#include <chrono>
-
 #include "nodes/formats/surface_io.h"
 #include "nodes/formats/tetmesh_io.h"
 #include "tests/helpers/io_checks.h"
+
+#include <catch2/catch.hpp>
+
+#include <chrono>
 
 using namespace polyhex;
 using namespace polyhex::iotest;
@@ -78,8 +78,10 @@ TEST_CASE("read_surface reads every shared surface with the README's counts", "[
       CHECK(r.flipped == 0);  // all are consistently and outward oriented
       CHECK(signed_volume(m) > 0);
       const bool stl = std::string(e.name).find(".stl") != std::string::npos;
-      if (stl) CHECK(r.welded == 3 * e.triangles - e.vertices);
-      else CHECK(r.welded == 0);
+      if (stl)
+        CHECK(r.welded == 3 * e.triangles - e.vertices);
+      else
+        CHECK(r.welded == 0);
       CHECK(slowest < 1.0);
     }
   }

@@ -1,11 +1,11 @@
+#include "nodes/formats/surface_io.h"
+#include "runtime/errors.h"
+#include "tests/helpers/io_checks.h"
+
 #include <catch2/catch.hpp>
 
 #include <chrono>
 #include <cstring>
-
-#include "nodes/formats/surface_io.h"
-#include "runtime/errors.h"
-#include "tests/helpers/io_checks.h"
 
 using namespace polyhex;
 using namespace polyhex::iotest;
@@ -198,7 +198,8 @@ TEST_CASE("read_surface: malformed files name the file and the problem", "[io]")
       {"faces.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "truncated: the header announces 2 faces"},
       {"extra.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n",
        "extra.off: line 7: more data after the 1 faces the header announces (wrong counts?)"},
-      {"counts.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "counts.off: line 6: truncated: the header announces 1 faces, the file ends after 0"},
+      {"counts.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+       "counts.off: line 6: truncated: the header announces 1 faces, the file ends after 0"},
       {"header.off", "PLY\n3 1 0\n", "header.off: line 1: not an OFF file"},
       {"open.obj", tet_v + "f 1 3 2\nf 1 2 4\nf 1 4 3\n",
        "open.obj: surface is not closed: 3 boundary edges (used by only one triangle)"},
@@ -206,7 +207,8 @@ TEST_CASE("read_surface: malformed files name the file and the problem", "[io]")
       {"flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 4\n",
        "flat.obj: face 0 (line 5) is degenerate: zero area"},
       // Two tetrahedra sharing the edge 0-1: that edge is in 4 triangles.
-      {"edge.obj", tet_v + "v 0 -1 0\nv 0 0 -1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\nf 1 5 2\nf 1 2 6\nf 1 6 5\nf 2 5 6\n",
+      {"edge.obj",
+       tet_v + "v 0 -1 0\nv 0 0 -1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\nf 1 5 2\nf 1 2 6\nf 1 6 5\nf 2 5 6\n",
        "edge.obj: non-manifold: 1 edges are used by more than 2 triangles"},
       // Two tetrahedra sharing vertex 0 only: closed and edge-manifold, but a pinch point.
       {"pinch.obj",
@@ -214,17 +216,21 @@ TEST_CASE("read_surface: malformed files name the file and the problem", "[io]")
        "pinch.obj: non-manifold vertex (0.000000, 0.000000, 0.000000): its triangles form more than one fan"},
       {"cut.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n",
        "cut.stl: line 5: truncated: the file ends inside a facet"},
-      {"noend.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n",
+      {"noend.stl",
+       "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n",
        "noend.stl: line 8: truncated: no `endsolid`"},
       {"tiny.stl", "abc", "tiny.stl: truncated: 3 bytes is too short for a binary STL"},
-      {"wrong.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                    "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n",
+      {"wrong.ply",
+       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+       "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n",
        "wrong.ply: line 14: more data after the elements the header announces (wrong counts?)"},
-      {"range.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                    "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n",
+      {"range.ply",
+       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+       "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n",
        "range.ply: line 13: triangle 0: vertex index 5 out of range (3 vertices)"},
-      {"cut.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                  "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n",
+      {"cut.ply",
+       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+       "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n",
        "cut.ply: line 11: truncated: unexpected end of file (expected vertex 2)"},
       {"noheader.ply", "ply\nformat ascii 1.0\nelement vertex 3\n", "noheader.ply: truncated: no `end_header`"},
       {"mesh.xyz", "1 2 3\n", "mesh.xyz: unknown surface extension `.xyz` (expected .obj, .off, .stl or .ply)"},
@@ -317,7 +323,8 @@ TEST_CASE("read_surface: a 50k-triangle OFF torus reads back with its counts, ge
     for (int j = 0; j < nv; ++j) {
       double u = 2 * M_PI * i / nu, v = 2 * M_PI * j / nv;
       m.V.row(i * nv + j) << (3 + std::cos(u)) * std::cos(v), (3 + std::cos(u)) * std::sin(v), std::sin(u);
-      int a = i * nv + j, b = ((i + 1) % nu) * nv + j, c = ((i + 1) % nu) * nv + (j + 1) % nv, d = i * nv + (j + 1) % nv;
+      int a = i * nv + j, b = ((i + 1) % nu) * nv + j, c = ((i + 1) % nu) * nv + (j + 1) % nv,
+          d = i * nv + (j + 1) % nv;
       m.F.row(2 * a) << a, b, c;
       m.F.row(2 * a + 1) << a, c, d;
     }

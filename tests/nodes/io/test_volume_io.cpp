@@ -1,15 +1,14 @@
-#include <catch2/catch.hpp>
-
-#include <cstdio>
-#include <fstream>
-#include <sstream>
-
-#include <nlohmann/json.hpp>
-
 #include "nodes/formats/hexmesh_io.h"
 #include "nodes/formats/tetmesh_io.h"
 #include "runtime/errors.h"
 #include "tests/helpers/io_checks.h"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
 
 using namespace polyhex;
 using namespace polyhex::iotest;
@@ -32,8 +31,8 @@ std::string slurp(const std::filesystem::path& p) {
 
 TEST_CASE("read_tetmesh: every fixture format gives the two positive tets", "[io]") {
   const TetMesh expected = two_tets();
-  for (const char* name : {"two_tets.mesh", "two_tets.vtk", "two_tets_v22.msh", "two_tets_v41.msh", "two_tets.node",
-                           "two_tets.ele"}) {
+  for (const char* name :
+       {"two_tets.mesh", "two_tets.vtk", "two_tets_v22.msh", "two_tets_v41.msh", "two_tets.node", "two_tets.ele"}) {
     SECTION(name) {
       TetReadReport r;
       TetMesh m = read_tetmesh(fixture(name), &r);
@@ -150,9 +149,11 @@ TEST_CASE("read_tetmesh: unused vertices are dropped with a warning", "[io]") {
 TEST_CASE("read_tetmesh: malformed files name the file and the problem", "[io]") {
   TempDir dir;
   const std::string mv = "MeshVersionFormatted 2\nDimension 3\nVertices\n4\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\n";
-  const std::string vtk = "# vtk DataFile Version 2.0\nt\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n"
-                          "0 0 0 1 0 0 0 1 0 0 0 1\n";
-  const std::string g22 = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n$EndNodes\n";
+  const std::string vtk =
+      "# vtk DataFile Version 2.0\nt\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n"
+      "0 0 0 1 0 0 0 1 0 0 0 1\n";
+  const std::string g22 =
+      "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n$EndNodes\n";
   struct Case {
     std::string name, content, message;
   };
@@ -164,15 +165,18 @@ TEST_CASE("read_tetmesh: malformed files name the file and the problem", "[io]")
        "count.mesh: line 8: expected vertex coordinate, got `Tetrahedra`"},
       {"few.mesh", "Dimension 3\nVertices\n3\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\nTetrahedra\n1\n1 2 3 4 0\n",
        "few.mesh: line 7: expected a section keyword, got `0` (wrong counts?)"},
-      {"nan.mesh", "Dimension 3\nVertices\n1\n0 nan 0 0\n", "nan.mesh: line 4: vertex coordinate is not finite (`nan`)"},
+      {"nan.mesh", "Dimension 3\nVertices\n1\n0 nan 0 0\n",
+       "nan.mesh: line 4: vertex coordinate is not finite (`nan`)"},
       {"dim.mesh", "Dimension 2\n", "dim.mesh: line 1: Dimension 2 is not supported"},
       {"notets.mesh", mv + "End\n", "notets.mesh: no Tetrahedra section"},
       {"range.vtk", vtk + "CELLS 1 5\n4 0 1 2 4\nCELL_TYPES 1\n10\n",
        "range.vtk: cell 0: vertex index 4 out of range (4 vertices)"},
-      {"size.vtk", vtk + "CELLS 1 6\n4 0 1 2 3 9\nCELL_TYPES 1\n10\n", "size.vtk: CELLS size is 6 but the 1 cells use 5"},
+      {"size.vtk", vtk + "CELLS 1 6\n4 0 1 2 3 9\nCELL_TYPES 1\n10\n",
+       "size.vtk: CELLS size is 6 but the 1 cells use 5"},
       {"types.vtk", vtk + "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 2\n10\n10\n",
        "types.vtk: line 9: CELL_TYPES lists 2 cells but CELLS 1 (wrong counts)"},
-      {"cut.vtk", vtk + "CELLS 1 5\n4 0 1\n", "cut.vtk: line 8: truncated: unexpected end of file (expected CELLS data)"},
+      {"cut.vtk", vtk + "CELLS 1 5\n4 0 1\n",
+       "cut.vtk: line 8: truncated: unexpected end of file (expected CELLS data)"},
       {"v5.vtk", vtk + "CELLS 2 4\nOFFSETS vtktypeint64\n0 4\nCONNECTIVITY vtktypeint64\n0 1 2 3\n",
        "v5.vtk: line 8: VTK 5 OFFSETS/CONNECTIVITY cells are not supported"},
       {"poly.vtk", "# vtk DataFile Version 2.0\nt\nASCII\nDATASET POLYDATA\n",
@@ -180,7 +184,8 @@ TEST_CASE("read_tetmesh: malformed files name the file and the problem", "[io]")
       {"header.vtk", "hello\n", "header.vtk: not a legacy VTK file"},
       {"tag.msh", g22 + "$Elements\n1\n1 4 0 1 2 3 5\n$EndElements\n",
        "tag.msh: line 13: element node tag 5 is not a node (4 vertices)"},
-      {"cut.msh", g22 + "$Elements\n2\n1 4 0 1 2 3 4\n", "cut.msh: line 13: truncated: unexpected end of file (expected element)"},
+      {"cut.msh", g22 + "$Elements\n2\n1 4 0 1 2 3 4\n",
+       "cut.msh: line 13: truncated: unexpected end of file (expected element)"},
       {"count.msh", g22 + "$Elements\n1\n1 4 0 1 2 3 4\n2 4 0 1 2 3 4\n$EndElements\n",
        "count.msh: line 14: expected $EndElements, got `2 4 0 1 2 3 4` (wrong counts?)"},
       {"bin.msh", "$MeshFormat\n2.2 1 8\n", "bin.msh: line 2: binary .msh files are not supported"},
@@ -194,8 +199,10 @@ TEST_CASE("read_tetmesh: malformed files name the file and the problem", "[io]")
   for (const auto& c : cases) {
     SECTION(c.name) {
       auto p = dir / c.name;
-      if (c.name == "range.ele") write_text(p, "1 4 0\n1 1 2 3 6\n");
-      else write_text(p, c.content);
+      if (c.name == "range.ele")
+        write_text(p, "1 4 0\n1 1 2 3 6\n");
+      else
+        write_text(p, c.content);
       REQUIRE_THROWS_WITH(read_tetmesh(p), Contains(c.message) && Contains(p.string()));
       REQUIRE_THROWS_AS(read_tetmesh(p), IOError);
     }
@@ -268,8 +275,8 @@ TEST_CASE("hexcheck.py reads the hex files we write", "[io][shared]") {
   }
   TempDir dir;
   HexMesh m = hex_grid(3);
-  for (auto [name, format] :
-       std::vector<std::pair<std::string, std::string>>{{"h.vtk", "vtk"}, {"hb.vtk", "vtk_binary"}, {"h.mesh", "mesh"}}) {
+  for (auto [name, format] : std::vector<std::pair<std::string, std::string>>{
+           {"h.vtk", "vtk"}, {"hb.vtk", "vtk_binary"}, {"h.mesh", "mesh"}}) {
     SECTION(name) {
       CellData cd;
       cd.reals.push_back({"sj", std::vector<double>(27, 1.0)});

@@ -1,13 +1,13 @@
 // Surface creases and the boundary vertices that follow them (features.h), and the optimizer's crease candidate.
+#include "nodes/algorithms/features.h"
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/optimize/optimize.h"
+#include "runtime/errors.h"
+#include "tests/helpers/voxel_maps.h"
+
 #include <catch2/catch.hpp>
 
 #include <cmath>
-
-#include "nodes/algorithms/features.h"
-#include "nodes/optimize/optimize.h"
-#include "nodes/algorithms/hex_quality.h"
-#include "runtime/errors.h"
-#include "tests/helpers/voxel_maps.h"
 
 using namespace polyhex;
 
@@ -58,8 +58,8 @@ TEST_CASE("find_creases: a box has 12 open crease lines between 8 corners; a cyl
     for (const auto& p : c.lines[l]) CHECK(on_box_edge(p, 3));
   }
   for (const auto& p : c.corners) CHECK(((p.array().abs() < 1e-12) || ((p.array() - 3).abs() < 1e-12)).all());
-  CHECK(find_creases(box, 95, 0.5).lines.empty());   // the box's dihedral angles are 90 degrees
-  CHECK(find_creases(box, 40, 3.5).lines.empty());   // every line is 3 long
+  CHECK(find_creases(box, 95, 0.5).lines.empty());  // the box's dihedral angles are 90 degrees
+  CHECK(find_creases(box, 40, 3.5).lines.empty());  // every line is 3 long
 
   const SurfaceCreases r = find_creases(cylinder(24), 40, 0.5);  // side edges bend by 15 degrees only
   REQUIRE(r.lines.size() == 2);

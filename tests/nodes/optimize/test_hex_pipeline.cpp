@@ -1,5 +1,16 @@
 // The whole chain tetrahedralize -> rotation_deform -> segment_polycube -> position_deform -> hex_extract
 // -> pad -> optimize on built-in shapes and shared surfaces, measured with hex_quality (hexcheck figures).
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/algorithms/shapes.h"
+#include "nodes/formats/surface_io.h"
+#include "nodes/hex_extract/hex_extract.h"
+#include "nodes/optimize/optimize.h"
+#include "nodes/pad/pad.h"
+#include "nodes/polycube_segment/polycube_segment.h"
+#include "nodes/position_deform/position_deform.h"
+#include "nodes/rotation_deform/rotation_deform.h"
+#include "nodes/tetrahedralize/tetgen.h"
+
 #include <catch2/catch.hpp>
 
 #include <chrono>
@@ -7,17 +18,6 @@
 #include <cstdlib>
 #include <filesystem>
 #include <sstream>
-
-#include "nodes/hex_extract/hex_extract.h"
-#include "nodes/formats/surface_io.h"
-#include "nodes/optimize/optimize.h"
-#include "nodes/pad/pad.h"
-#include "nodes/polycube_segment/polycube_segment.h"
-#include "nodes/position_deform/position_deform.h"
-#include "nodes/algorithms/hex_quality.h"
-#include "nodes/rotation_deform/rotation_deform.h"
-#include "nodes/algorithms/shapes.h"
-#include "nodes/tetrahedralize/tetgen.h"
 
 using namespace polyhex;
 
@@ -73,14 +73,14 @@ ChainResult run_chain(const SurfaceMesh& s, double h, double tet_edge, double op
 
 std::string row(const std::string& name, const ChainResult& r) {
   char buf[600];
-  std::snprintf(buf, sizeof buf,
-                "%-16s tets %7ld | hexes %7ld inv %ld (extract inv %ld, unlocated %ld, skipped %ld) | SJ min %.3f avg %.3f "
-                "(before opt %.3f/%.3f) | irr %.1f%% | haus mean %.2e max %.2e | t tet %.1f rot %.1f seg %.1f pos %.1f "
-                "hex %.1f pad %.1f opt %.1f s",
-                name.c_str(), r.tets, r.q.hexes, r.q.inverted, r.extract.inverted, r.extract.unlocated,
-                r.extract.hexes_skipped, r.q.sj_min, r.q.sj_avg, r.opt.sj_min_before, r.opt.sj_avg_before,
-                r.q.irregular_pct, r.q.hausdorff_mean, r.q.hausdorff_max, r.t_tet, r.t_rot, r.t_seg, r.t_pos,
-                r.extract.seconds, r.pad.seconds, r.opt.seconds);
+  std::snprintf(
+      buf, sizeof buf,
+      "%-16s tets %7ld | hexes %7ld inv %ld (extract inv %ld, unlocated %ld, skipped %ld) | SJ min %.3f avg %.3f "
+      "(before opt %.3f/%.3f) | irr %.1f%% | haus mean %.2e max %.2e | t tet %.1f rot %.1f seg %.1f pos %.1f "
+      "hex %.1f pad %.1f opt %.1f s",
+      name.c_str(), r.tets, r.q.hexes, r.q.inverted, r.extract.inverted, r.extract.unlocated, r.extract.hexes_skipped,
+      r.q.sj_min, r.q.sj_avg, r.opt.sj_min_before, r.opt.sj_avg_before, r.q.irregular_pct, r.q.hausdorff_mean,
+      r.q.hausdorff_max, r.t_tet, r.t_rot, r.t_seg, r.t_pos, r.extract.seconds, r.pad.seconds, r.opt.seconds);
   return buf;
 }
 

@@ -1,13 +1,13 @@
 // Hex optimization (§6): max-min SJ never lowers the minimum, untangling, boundary on the surface.
+#include "graph/node.h"
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/algorithms/triangle_tree.h"
+#include "nodes/optimize/optimize.h"
+#include "tests/helpers/voxel_maps.h"
+
 #include <catch2/catch.hpp>
 
 #include <random>
-
-#include "graph/node.h"
-#include "nodes/optimize/optimize.h"
-#include "nodes/algorithms/hex_quality.h"
-#include "nodes/algorithms/triangle_tree.h"
-#include "tests/helpers/voxel_maps.h"
 
 using namespace polyhex;
 
@@ -134,8 +134,13 @@ TEST_CASE("the optimize node never hands out an inverted hex silently", "[optimi
   in.items = {make_artefact(g), make_artefact(test::voxel_surface(test::voxel_box(3, 3, 3)))};
   NodeContext ctx;
   ctx.id = "opt";
-  json params = spec->check_params(
-      json{{"untangle_iterations", 0}, {"global_iterations", 0}, {"iterations", 0}, {"element_iterations", 0}, {"shape_iterations", 0}, {"release_boundary", false}}, "opt");
+  json params = spec->check_params(json{{"untangle_iterations", 0},
+                                        {"global_iterations", 0},
+                                        {"iterations", 0},
+                                        {"element_iterations", 0},
+                                        {"shape_iterations", 0},
+                                        {"release_boundary", false}},
+                                   "opt");
   Artefact out = spec->run(params, in, ctx);
   CHECK(out.as<HexMesh>()->H.rows() == 27);
   CHECK(ctx.metrics["inverted"].get<long>() > 0);
@@ -229,7 +234,8 @@ TEST_CASE("whole-hex moves separate two vertices pressed together and keep the b
   CHECK(boundary_distance(m, s) < 1e-9);
   // an undistorted grid offers nothing to improve: no whole-hex move is kept
   OptimizeStats st2;
-  const HexMesh same = optimize_hexes(test::grid_hex_mesh(2, 2, 2), test::voxel_surface(test::voxel_box(2, 2, 2)), only, &st2);
+  const HexMesh same =
+      optimize_hexes(test::grid_hex_mesh(2, 2, 2), test::voxel_surface(test::voxel_box(2, 2, 2)), only, &st2);
   CHECK(st2.element_moves == 0);
   CHECK(same.V == test::grid_hex_mesh(2, 2, 2).V);
 }
@@ -290,7 +296,8 @@ TEST_CASE("the fallback mesh is optimized only when hexes stay inverted, and kep
   CHECK(better_result(a, b));
 }
 
-TEST_CASE("the shape sweeps raise the average and stop once a pair of them gains less than shape_tolerance", "[optimize]") {
+TEST_CASE("the shape sweeps raise the average and stop once a pair of them gains less than shape_tolerance",
+          "[optimize]") {
   const int n = 4;
   HexMesh g = test::grid_hex_mesh(n, n, n);
   const SurfaceMesh s = test::voxel_surface(test::voxel_box(n, n, n));
@@ -315,7 +322,8 @@ TEST_CASE("the shape sweeps raise the average and stop once a pair of them gains
   CHECK(many.inverted_after == 0);
 }
 
-TEST_CASE("the average ascent raises the average beyond the sweeps alone, keeps the minimum and the boundary", "[optimize]") {
+TEST_CASE("the average ascent raises the average beyond the sweeps alone, keeps the minimum and the boundary",
+          "[optimize]") {
   // the interior of a 6x6x6 grid swirled about the z axis: a smooth distortion the one-vertex sweeps
   // undo slowly
   const int n = 6;

@@ -1,11 +1,11 @@
 // The read_hex node (configs/optimize_only.json reruns the optimization on a saved mesh).
-#include <catch2/catch.hpp>
-
-#include <filesystem>
-
 #include "graph/node.h"
 #include "nodes/formats/hexmesh_io.h"
 #include "tests/helpers/hex_fixtures.h"
+
+#include <catch2/catch.hpp>
+
+#include <filesystem>
 
 using namespace polyhex;
 
@@ -33,7 +33,6 @@ TEST_CASE("read_hex reads a saved hex mesh exactly and names a missing file", "[
   ctx2.id = "hexes";
   REQUIRE_THROWS_WITH(spec->run(spec->check_params(json{{"path", (dir / "none.vtk").string()}}, "hexes"), in, ctx2),
                       Catch::Contains("none.vtk"));
-  REQUIRE_THROWS_WITH(spec->run(spec->check_params(json{{"path", ""}}, "hexes"), in, ctx2),
-                      Catch::Contains("path"));
+  REQUIRE_THROWS_WITH(spec->run(spec->check_params(json{{"path", ""}}, "hexes"), in, ctx2), Catch::Contains("path"));
   std::filesystem::remove_all(dir);
 }

@@ -1,10 +1,10 @@
 // Global untangling (§6 optimization): the energy, its gradient, and untangling a folded grid.
-#include <catch2/catch.hpp>
-
 #include "nodes/algorithms/hex_corners.h"
-#include "nodes/optimize/untangle_global.h"
 #include "nodes/algorithms/hex_quality.h"
+#include "nodes/optimize/untangle_global.h"
 #include "tests/helpers/voxel_maps.h"
+
+#include <catch2/catch.hpp>
 
 using namespace polyhex;
 
@@ -27,8 +27,10 @@ struct BoxGrid {
   std::vector<char> on_surface, fixed;
   BoxGrid() : normals(size_t(s.F.rows())), on_surface(size_t(g.V.rows()), 0), fixed(size_t(g.V.rows()), 0) {
     for (Eigen::Index f = 0; f < s.F.rows(); ++f)
-      normals[size_t(f)] =
-          (s.V.row(s.F(f, 1)) - s.V.row(s.F(f, 0))).cross(s.V.row(s.F(f, 2)) - s.V.row(s.F(f, 0))).normalized().transpose();
+      normals[size_t(f)] = (s.V.row(s.F(f, 1)) - s.V.row(s.F(f, 0)))
+                               .cross(s.V.row(s.F(f, 2)) - s.V.row(s.F(f, 0)))
+                               .normalized()
+                               .transpose();
     const auto Q = hex_boundary_quads(g);
     for (Eigen::Index q = 0; q < Q.rows(); ++q)
       for (int k = 0; k < 4; ++k) on_surface[size_t(Q(q, k))] = 1;
@@ -121,7 +123,8 @@ TEST_CASE("untangle_global leaves an untangled mesh and fixed vertices alone", "
   CHECK(g.V == folded);
 }
 
-TEST_CASE("smooth_region evens out a squeezed patch, keeps the surface and needs an untangled region", "[quality-opt]") {
+TEST_CASE("smooth_region evens out a squeezed patch, keeps the surface and needs an untangled region",
+          "[quality-opt]") {
   BoxGrid b;
   [[maybe_unused]] auto& [g, surface, tree, normals, on_surface, fixed] = b;
   // a boundary vertex of the z = 0 face slid along the face towards its neighbour: squeezed, not inverted
@@ -245,9 +248,10 @@ TEST_CASE("raise_average lifts the average of a swirled grid, keeps fixed vertic
   CHECK(F == folded.V);
 }
 
-TEST_CASE("fast_cbrt: within 4 ulps of std::cbrt on normal positives, std::cbrt's answer elsewhere; the Winslow "
-          "term agrees either way",
-          "[quality-opt]") {
+TEST_CASE(
+    "fast_cbrt: within 4 ulps of std::cbrt on normal positives, std::cbrt's answer elsewhere; the Winslow "
+    "term agrees either way",
+    "[quality-opt]") {
   using optimize_detail::fast_cbrt;
   // 25 decades, 2000 points per decade, irregular mantissas
   double worst = 0;
@@ -271,8 +275,8 @@ TEST_CASE("fast_cbrt: within 4 ulps of std::cbrt on normal positives, std::cbrt'
     Eigen::Matrix3d J;
     J << 1.1, 0.2, -0.1, 0.05, 0.9, 0.3, 0.0, -0.2, d;
     Eigen::Matrix3d ga, gb;
-    const double a = optimize_detail::winslow_term(J, 0.05, &ga), b =
-        optimize_detail::winslow_term(J, 0.05, &gb, optimize_detail::CubeRoot::fast);
+    const double a = optimize_detail::winslow_term(J, 0.05, &ga),
+                 b = optimize_detail::winslow_term(J, 0.05, &gb, optimize_detail::CubeRoot::fast);
     CHECK(b == Approx(a).epsilon(1e-14));
     CHECK((ga - gb).norm() <= 1e-13 * ga.norm());
   }

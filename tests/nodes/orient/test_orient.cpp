@@ -1,11 +1,11 @@
 // The orientation search (nodes/orient): the frame it finds for turned copies of generated shapes.
-#include <catch2/catch.hpp>
-
 #include "nodes/algorithms/rotations.h"
-#include "nodes/orient/orient.h"
 #include "nodes/algorithms/shapes.h"
+#include "nodes/orient/orient.h"
 #include "runtime/errors.h"
 #include "tests/helpers/rotations.h"
+
+#include <catch2/catch.hpp>
 
 using namespace polyhex;
 
@@ -29,7 +29,8 @@ TEST_CASE("orient: a turned box gets the box's own frame back, to within a degre
     REQUIRE(f.candidates[0].source == "input");
     CHECK(f.candidates[0].R == Eigen::Matrix3d::Identity());
     const FrameCandidate& c = best_other(f);
-    INFO("seed " << seed << ": input energy " << f.candidates[0].energy << ", best " << c.energy << " from " << c.source);
+    INFO("seed " << seed << ": input energy " << f.candidates[0].energy << ", best " << c.energy << " from "
+                 << c.source);
     CHECK(c.branch == 1);
     CHECK(f.candidates[0].branch == 0);  // the turned input frame is far worse: not run
     // x_frame = C x_turned = C R x_box: C R is one of the cube's rotations when C is the box's frame.

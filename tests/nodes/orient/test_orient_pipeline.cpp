@@ -1,15 +1,15 @@
 // The default config on a turned part: the same sizes as the part in its own frame, the part's frame
 // found, and a mesh on the turned input's surface (not on the part where it was before turning).
-#include <catch2/catch.hpp>
-
-#include <cmath>
-
+#include "nodes/algorithms/shapes.h"
 #include "nodes/formats/surface_io.h"
 #include "nodes/formats/tetmesh_io.h"
-#include "nodes/algorithms/shapes.h"
 #include "tests/helpers/cli.h"
 #include "tests/helpers/report.h"
 #include "tests/helpers/rotations.h"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
 
 using json = nlohmann::json;
 namespace fs = std::filesystem;
@@ -19,8 +19,8 @@ namespace {
 
 json run_default(const fs::path& input, const fs::path& out, const std::string& more = "") {
   const auto r = polyhex::test::run_polyhex("run " + std::string(POLYHEX_SOURCE_DIR) + "/configs/default.json -i " +
-                                            input.string() + " --hex-edge 0.04 --threads 2 --no-cache --out " + out.string() +
-                                            more);
+                                            input.string() + " --hex-edge 0.04 --threads 2 --no-cache --out " +
+                                            out.string() + more);
   INFO(r.out);
   REQUIRE(r.code == 0);
   return json::parse(polyhex::test::read_text(out / "report.json"));
@@ -28,7 +28,8 @@ json run_default(const fs::path& input, const fs::path& out, const std::string& 
 
 }  // namespace
 
-TEST_CASE("orient: a turned L-block is meshed in its own frame, at the same size, on the turned surface", "[orient][cli]") {
+TEST_CASE("orient: a turned L-block is meshed in its own frame, at the same size, on the turned surface",
+          "[orient][cli]") {
   const fs::path dir = polyhex::test::fresh_dir("orient_turned");
   const polyhex::SurfaceMesh block = polyhex::make_shape({"l_block", 32});
   polyhex::write_surface(block, dir / "block.obj");

@@ -1,9 +1,9 @@
 // Padding layer (§6 inset): counts, closed boundary, inner copies, offsets limited against inversion.
-#include <catch2/catch.hpp>
-
-#include "nodes/pad/pad.h"
 #include "nodes/algorithms/hex_quality.h"
+#include "nodes/pad/pad.h"
 #include "tests/helpers/voxel_maps.h"
+
+#include <catch2/catch.hpp>
 
 using namespace polyhex;
 

@@ -1,13 +1,13 @@
 // Boundary doublets before padding: found, the worse hex removed, the boundary stays manifold.
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/pad/pad.h"
+#include "tests/helpers/hex_fixtures.h"
+
 #include <catch2/catch.hpp>
 
 #include <array>
 #include <map>
 #include <vector>
-
-#include "nodes/pad/pad.h"
-#include "nodes/algorithms/hex_quality.h"
-#include "tests/helpers/hex_fixtures.h"
 
 using namespace polyhex;
 
@@ -40,8 +40,8 @@ HexMesh cubes_with_slit(const std::vector<std::array<int, 3>>& cells, const std:
   };
   std::vector<std::array<int, 8>> hexes;
   for (auto [i, j, k] : cells)
-    hexes.push_back({vid({i, j, k}), vid({i + 1, j, k}), vid({i + 1, j + 1, k}), vid({i, j + 1, k}),
-                     vid({i, j, k + 1}), vid({i + 1, j, k + 1}), vid({i + 1, j + 1, k + 1}), vid({i, j + 1, k + 1})});
+    hexes.push_back({vid({i, j, k}), vid({i + 1, j, k}), vid({i + 1, j + 1, k}), vid({i, j + 1, k}), vid({i, j, k + 1}),
+                     vid({i + 1, j, k + 1}), vid({i + 1, j + 1, k + 1}), vid({i, j + 1, k + 1})});
   const int orig = id.at(slit), copy = int(pos.size());
   pos.push_back(slit);
   for (size_t h = 0; h < cells.size(); ++h)

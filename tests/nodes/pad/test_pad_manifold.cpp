@@ -1,13 +1,13 @@
 // Non-manifold boundary before padding: sheets of hexes touching along an edge or at a vertex only are
 // found, the repair removes hexes until the boundary is manifold, a clean mesh is left alone.
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/pad/pad.h"
+#include "tests/helpers/hex_fixtures.h"
+
 #include <catch2/catch.hpp>
 
 #include <algorithm>
 #include <vector>
-
-#include "nodes/pad/pad.h"
-#include "nodes/algorithms/hex_quality.h"
-#include "tests/helpers/hex_fixtures.h"
 
 using namespace polyhex;
 

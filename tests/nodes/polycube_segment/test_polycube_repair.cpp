@@ -1,11 +1,11 @@
 // [segment]: the extensions of §5.1 that repair what the splits leave (island cuts of ring charts,
 // patches at 4-valent corners), on hand-made labellings of a voxel box with known answers.
+#include "nodes/polycube_segment/polycube_segment.h"
+#include "tests/helpers/voxel_shapes.h"
+
 #include <catch2/catch.hpp>
 
 #include <string>
-
-#include "nodes/polycube_segment/polycube_segment.h"
-#include "tests/helpers/voxel_shapes.h"
 
 using namespace polyhex;
 using namespace polyhex::test;
@@ -65,8 +65,7 @@ TEST_CASE("island inside a ring chart: two cuts along the edge axis make it a fa
     CHECK(after.corners.size() == 12);
     int strip = -1;
     for (size_t c = 0; c < after.charts.size(); ++c)
-      if (after.charts[c].label == 0 && after.charts[c].neighbours.size() == 4 &&
-          after.charts[c].triangles < 6 * 6 * 2)
+      if (after.charts[c].label == 0 && after.charts[c].neighbours.size() == 4 && after.charts[c].triangles < 6 * 6 * 2)
         strip = int(c);
     REQUIRE(strip >= 0);
     // the strip runs the whole depth of the +Y face in z, from the -Z face to the +Z face

@@ -1,4 +1,10 @@
 // [segment] tests of the PolyCube structure extraction (paper §5.1) on generated tet meshes.
+#include "graph/node.h"
+#include "nodes/polycube_segment/polycube_segment.h"
+#include "nodes/rotation_deform/rotation_deform.h"
+#include "runtime/errors.h"
+#include "tests/helpers/segment_fixtures.h"
+
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -6,14 +12,7 @@
 #include <fstream>
 #include <set>
 #include <sstream>
-
 #include <unistd.h>
-
-#include "graph/node.h"
-#include "nodes/polycube_segment/polycube_segment.h"
-#include "nodes/rotation_deform/rotation_deform.h"
-#include "runtime/errors.h"
-#include "tests/helpers/segment_fixtures.h"
 
 using namespace polyhex;
 using namespace polyhex::test;
@@ -64,8 +63,7 @@ int count_separating(const PolyCubeSegmentation& s) {
 
 double signed_volume(const RowMatrixX3d& V, const RowMatrixX3i& F) {
   double vol = 0;
-  for (int t = 0; t < F.rows(); ++t)
-    vol += V.row(F(t, 0)).dot(V.row(F(t, 1)).cross(V.row(F(t, 2)))) / 6;
+  for (int t = 0; t < F.rows(); ++t) vol += V.row(F(t, 0)).dot(V.row(F(t, 1)).cross(V.row(F(t, 2)))) / 6;
   return vol;
 }
 
@@ -73,18 +71,18 @@ double signed_volume(const RowMatrixX3d& V, const RowMatrixX3i& F) {
 /// in x: a steep -X riser near y = 0 that flattens into the +Z top beyond y ~ 0.7. The riser is a
 /// wedge pointing into the +Z top, which wraps around its tip (paper Figure 8).
 TetMesh fading_step() {
-  return voxel_tets({40, 20, 5}, 0.05, [](int, int, int) { return true; }, [](const Point& q) {
-    Point p(q.x(), q.y(), 4 * q.z());
-    double ramp = std::clamp((p.x() - 1.0) / 0.1, 0.0, 1.0);
-    return Point(p.x(), p.y(), p.z() * (1 + 0.5 * ramp * (1 - p.y())));
-  });
+  return voxel_tets(
+      {40, 20, 5}, 0.05, [](int, int, int) { return true; },
+      [](const Point& q) {
+        Point p(q.x(), q.y(), 4 * q.z());
+        double ramp = std::clamp((p.x() - 1.0) / 0.1, 0.0, 1.0);
+        return Point(p.x(), p.y(), p.z() * (1 + 0.5 * ramp * (1 - p.y())));
+      });
 }
 
 /// A knife: triangular prism, cross-section (0,-0.5), (2,0), (0,0.5) in (x,z), extruded over y in
 /// [0,1]. Its +Z top and -Z bottom meet at the blade: one Z chart maps to both sides (Figure 7).
-TetMesh knife() {
-  return extruded_triangle_tets({0, -0.5}, {2, 0}, {0, 0.5}, 8, 1.0, 4);
-}
+TetMesh knife() { return extruded_triangle_tets({0, -0.5}, {2, 0}, {0, 0.5}, 8, 1.0, 4); }
 
 Eigen::Vector3d centroid(const TetMesh& m, const RowMatrixX3i& F, int t) {
   return (m.V.row(F(t, 0)) + m.V.row(F(t, 1)) + m.V.row(F(t, 2))).transpose() / 3;
@@ -149,8 +147,7 @@ TEST_CASE("L-block: 8 charts, 12 corners, 18 edges, valid", "[segment]") {
 }
 
 TEST_CASE("box rotated by 30 degrees, after rotation_deform: 6 charts", "[segment]") {
-  Eigen::Matrix3d R =
-      Eigen::AngleAxisd(30 * M_PI / 180, Eigen::Vector3d(0.3, 0.2, 1).normalized()).toRotationMatrix();
+  Eigen::Matrix3d R = Eigen::AngleAxisd(30 * M_PI / 180, Eigen::Vector3d(0.3, 0.2, 1).normalized()).toRotationMatrix();
   TetMesh rotated = transformed(box_tets(1, 1, 1, 6), R);
   RotationDeformResult deformed = rotation_deform(rotated, RotationDeformParams{});
   PolyCubeSegmentation s = segment_polycube(deformed.mesh);
@@ -217,9 +214,8 @@ TEST_CASE("wedge (Figure 8): the concave chart gets the valid, cheapest cut", "[
     REQUIRE(riser >= 0);
     CHECK(s.charts[riser].neighbours.size() == 2);
     CHECK(s.failing_charts == std::vector<int>{riser});
-    CHECK_THROWS_WITH(require_valid_polycube(s),
-                      Catch::Contains("chart " + std::to_string(riser) + " (-X, ") &&
-                          Catch::Contains("has 2 neighbour(s)"));
+    CHECK_THROWS_WITH(require_valid_polycube(s), Catch::Contains("chart " + std::to_string(riser) + " (-X, ") &&
+                                                     Catch::Contains("has 2 neighbour(s)"));
   }
   SECTION("a severity cut-off above the wedge leaves it alone") {
     PolyCubeSegmentParams p = no_ramps();
@@ -233,8 +229,9 @@ TEST_CASE("ramp: a bar whose top and bottom climb 1 over its length 4 is cut int
   // [0,4]x[0,0.4]x[0,0.4] sheared z += x / 4: the Z faces tilt by 14 degrees (labels stay +-Z) and span
   // ~24 hex edges (h = 1 % of the diagonal 4.26) along Z; no chart edge doubles back, so the wedge rule
   // does not see them
-  TetMesh m = voxel_tets({80, 8, 8}, 0.05, [](int, int, int) { return true; },
-                         [](const Point& q) { return Point(q.x(), q.y(), q.z() + 0.25 * q.x()); });
+  TetMesh m = voxel_tets(
+      {80, 8, 8}, 0.05, [](int, int, int) { return true; },
+      [](const Point& q) { return Point(q.x(), q.y(), q.z() + 0.25 * q.x()); });
   const double h = 0.01 * (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm();
   PolyCubeSegmentParams p;
   p.fallback_retries = 0;
@@ -288,8 +285,11 @@ TEST_CASE("narrow charts: a step lower than the lattice resolves is removed, a r
   // on the top face. h = 1 % of the diagonal (~0.0245); the riser runs the box's width (41 h), so at
   // step 0.01 its area is about 17 hex faces: a removal candidate only with narrow_chart_faces above that.
   auto stepped_box = [](double step) {
-    return voxel_tets({20, 10, 11}, 0.1, [](int i, int, int k) { return !(i >= 10 && k == 10); },
-                      [step](const Point& q) { return Point(q.x(), q.y(), q.z() <= 1.0 + 1e-9 ? q.z() : 1.0 + step * (q.z() - 1.0) / 0.1); });
+    return voxel_tets(
+        {20, 10, 11}, 0.1, [](int i, int, int k) { return !(i >= 10 && k == 10); },
+        [step](const Point& q) {
+          return Point(q.x(), q.y(), q.z() <= 1.0 + 1e-9 ? q.z() : 1.0 + step * (q.z() - 1.0) / 0.1);
+        });
   };
   PolyCubeSegmentParams p;
   p.fallback_retries = 0;
@@ -415,8 +415,8 @@ TEST_CASE("non-manifold boundary is rejected naming an edge", "[segment]") {
   // two cubes sharing only an edge
   TetMesh m = voxel_tets({2, 2, 1}, 1.0, [](int i, int j, int) { return i == j; });
   CHECK_THROWS_AS(segment_polycube(m), InvalidInput);
-  CHECK_THROWS_WITH(segment_polycube(m), Catch::Contains("not a closed 2-manifold: edge (") &&
-                                             Catch::Contains("is used by 4 triangle(s)"));
+  CHECK_THROWS_WITH(segment_polycube(m),
+                    Catch::Contains("not a closed 2-manifold: edge (") && Catch::Contains("is used by 4 triangle(s)"));
 }
 
 TEST_CASE("polycube_segment node: metrics, VTK output and failure", "[segment]") {
@@ -458,16 +458,22 @@ TEST_CASE("polycube_segment node: metrics, VTK output and failure", "[segment]")
   bad.items.push_back(make_artefact(fading_step()));
   NodeContext ctx2 = ctx;
   ctx2.metrics = json::object();
-  json strict = spec->check_params(json{{"split_wedges", false}, {"split_ramps", false}, {"fallback_retries", 0}, {"split_islands", false}, {"repair_corners", false}}, "seg");
+  json strict = spec->check_params(json{{"split_wedges", false},
+                                        {"split_ramps", false},
+                                        {"fallback_retries", 0},
+                                        {"split_islands", false},
+                                        {"repair_corners", false}},
+                                   "seg");
   CHECK_THROWS_WITH(spec->run(strict, bad, ctx2), Catch::Contains("has 2 neighbour(s)"));
   NodeContext ctx3 = ctx2;
   ctx3.warnings.clear();
   json lenient = spec->check_params(json{{"split_wedges", false},
-                                              {"split_ramps", false},
-                                              {"fallback_retries", 0},
-                                              {"split_islands", false},
-                                              {"repair_corners", false},
-                                              {"allow_invalid", true}}, "seg");
+                                         {"split_ramps", false},
+                                         {"fallback_retries", 0},
+                                         {"split_islands", false},
+                                         {"repair_corners", false},
+                                         {"allow_invalid", true}},
+                                    "seg");
   Artefact passed = spec->run(lenient, bad, ctx3);
   CHECK_FALSE(passed.as<PolyCubeSegmentation>()->valid);
   CHECK(ctx3.metrics["valid"] == false);

@@ -1,17 +1,17 @@
 // [segment][shared]: the real pipeline (tetrahedralize -> rotation_deform -> polycube_segment) on
 // ten fast models of ../shared/data/surfaces gives valid PolyCube structures (paper §5.1, "for all inputs
 // tested, these two splitting rules have produced valid PolyCube structures").
-#include <catch2/catch.hpp>
-
-#include <algorithm>
-#include <chrono>
-#include <filesystem>
-
 #include "nodes/formats/surface_io.h"
 #include "nodes/polycube_segment/polycube_segment.h"
 #include "nodes/rotation_deform/rotation_deform.h"
 #include "nodes/tetrahedralize/tetgen.h"
 #include "tests/helpers/segment_fixtures.h"
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
 
 using namespace polyhex;
 
@@ -54,9 +54,15 @@ TEST_CASE("shared surfaces: tetrahedralize, rotation_deform, polycube_segment gi
   }
   // The fast models (CAD and small scans); the whole folder takes minutes and is measured outside
   // the test suite (see the report of issue 4).
-  const char* models[] = {"8-connected.stl",        "cuboid_screw_thread.stl", "cuboid_torus_with_step.stl",
-                          "cuboid_tray_with_step.stl", "in-volume_knot.stl",    "in-volume_twist.stl",
-                          "mambo_B0.obj",           "mambo_S3.off",            "fandisk.off",
+  const char* models[] = {"8-connected.stl",
+                          "cuboid_screw_thread.stl",
+                          "cuboid_torus_with_step.stl",
+                          "cuboid_tray_with_step.stl",
+                          "in-volume_knot.stl",
+                          "in-volume_twist.stl",
+                          "mambo_B0.obj",
+                          "mambo_S3.off",
+                          "fandisk.off",
                           "kitten.off"};
   std::vector<std::filesystem::path> files;
   for (const char* m : models) files.push_back(dir / m);
@@ -96,11 +102,10 @@ TEST_CASE("shared surfaces: tetrahedralize, rotation_deform, polycube_segment gi
     }
     WARN(f.filename().string() << ": " << tets.T.rows() << " tets, charts " << s.charts.size() << ", corners "
                                << s.corners.size() << ", edges " << s.edges.size() << ", splits multi/wedge/ramp "
-                               << s.splits_multi_orientation << "/" << s.splits_wedge << "/" << s.splits_ramp << ", order cycles cut/left "
-                               << s.splits_order_cycle << "/" << s.order_cycles
-                               << ", removed small "
-                               << s.removed_small << ", smoothing " << s.smoothing_iterations << ", valid " << s.valid
-                               << ", " << seconds << " s");
+                               << s.splits_multi_orientation << "/" << s.splits_wedge << "/" << s.splits_ramp
+                               << ", order cycles cut/left " << s.splits_order_cycle << "/" << s.order_cycles
+                               << ", removed small " << s.removed_small << ", smoothing " << s.smoothing_iterations
+                               << ", valid " << s.valid << ", " << seconds << " s");
   }
 }
 

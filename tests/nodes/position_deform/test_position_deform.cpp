@@ -1,22 +1,20 @@
 // Position-driven deformation (§5.2): planarity, integer chart planes, chart order, analytic answers.
-#include <catch2/catch.hpp>
-#include <oneapi/tbb/global_control.h>
-
-#include <Eigen/Geometry>
-#include <cmath>
-#include <fstream>
-#include <iterator>
-
-#include <unistd.h>
-
 #include "graph/node.h"
-
+#include "nodes/algorithms/shapes.h"
 #include "nodes/polycube_segment/polycube_segment.h"
 #include "nodes/position_deform/position_deform.h"
 #include "nodes/rotation_deform/rotation_deform.h"
-#include "nodes/algorithms/shapes.h"
 #include "nodes/tetrahedralize/tetgen.h"
 #include "tests/helpers/voxel_shapes.h"
+
+#include <Eigen/Geometry>
+#include <catch2/catch.hpp>
+#include <oneapi/tbb/global_control.h>
+
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <unistd.h>
 
 using namespace polyhex;
 
@@ -133,7 +131,8 @@ TEST_CASE("the map's untangling removes folds and keeps every chart on its integ
 
 TEST_CASE("a C-shape keeps the gap between its arms", "[position]") {
   // C in the xy-plane: arms at y in [0,1] and [2,3], joined at x in [0,1]; the gap y in [1,2], x in [1,3].
-  SurfaceMesh c = test::voxel_surface({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 1, 0}, {0, 2, 0}, {1, 2, 0}, {2, 2, 0}}, 1.0);
+  SurfaceMesh c =
+      test::voxel_surface({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 1, 0}, {0, 2, 0}, {1, 2, 0}, {2, 2, 0}}, 1.0);
   PositionDeformParams p;
   p.edge_length = 0.05;
   Run r = run_pipeline(c, 0.05, p);
@@ -164,7 +163,8 @@ TEST_CASE("conformal distortion: 1 for similarities, larger for a stretch, inf f
   Eigen::Matrix3d R = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   CHECK(conformal_distortion(a, b, c, d, 2 * R * a, 2 * R * b, 2 * R * c, 2 * R * d) == Approx(1.0));
   Eigen::Vector3d s(2, 1, 1);
-  double stretched = conformal_distortion(a, b, c, d, a.cwiseProduct(s), b.cwiseProduct(s), c.cwiseProduct(s), d.cwiseProduct(s));
+  double stretched =
+      conformal_distortion(a, b, c, d, a.cwiseProduct(s), b.cwiseProduct(s), c.cwiseProduct(s), d.cwiseProduct(s));
   CHECK(stretched == Approx(std::sqrt(6.0) * std::sqrt(2.25) / 3.0));
   CHECK(std::isinf(conformal_distortion(a, b, c, d, a, c, b, d)));
 }
@@ -194,7 +194,8 @@ TEST_CASE("bad inputs to position_deform are named", "[position]") {
                           Catch::Contains("use edge_length >= 0.00213"));
 }
 
-TEST_CASE("position_deform saver (--save-all) writes the PolyCube tet mesh and the PolyCube surface with chart ids", "[position]") {
+TEST_CASE("position_deform saver (--save-all) writes the PolyCube tet mesh and the PolyCube surface with chart ids",
+          "[position]") {
   SurfaceMesh box = test::voxel_surface(test::voxel_box(2, 1, 1), 0.5);
   PositionDeformParams p;
   p.edge_length = 0.1;
@@ -209,7 +210,8 @@ TEST_CASE("position_deform saver (--save-all) writes the PolyCube tet mesh and t
   REQUIRE(std::filesystem::exists(dir / "m.polycube_surface.vtk"));
   std::ifstream in(dir / "m.polycube_surface.vtk");
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  CHECK_THAT(text, Catch::Contains("CELL_DATA " + std::to_string(r.seg->F.rows())) && Catch::Contains("SCALARS chart int"));
+  CHECK_THAT(text,
+             Catch::Contains("CELL_DATA " + std::to_string(r.seg->F.rows())) && Catch::Contains("SCALARS chart int"));
   std::filesystem::remove_all(dir);
 }
 

@@ -1,13 +1,13 @@
 // Untangling of the PolyCube map: folds undone, chart planes kept exactly, flat tets left alone.
-#include <catch2/catch.hpp>
+#include "nodes/position_deform/untangle_map.h"
 
 #include <Eigen/Dense>
+#include <catch2/catch.hpp>
+
 #include <array>
 #include <cmath>
 #include <limits>
 #include <map>
-
-#include "nodes/position_deform/untangle_map.h"
 
 using namespace polyhex;
 
@@ -67,7 +67,8 @@ long inverted(const RowMatrixX3d& U, const RowMatrixX4i& T) {
   long n = 0;
   for (Eigen::Index t = 0; t < T.rows(); ++t) {
     const Eigen::Vector3d a = U.row(T(t, 0));
-    n += (Eigen::Vector3d(U.row(T(t, 1))) - a).dot((Eigen::Vector3d(U.row(T(t, 2))) - a).cross(Eigen::Vector3d(U.row(T(t, 3))) - a)) <= 0;
+    n += (Eigen::Vector3d(U.row(T(t, 1))) - a)
+             .dot((Eigen::Vector3d(U.row(T(t, 2))) - a).cross(Eigen::Vector3d(U.row(T(t, 3))) - a)) <= 0;
   }
   return n;
 }
@@ -128,7 +129,8 @@ TEST_CASE("with no rounds the map is left as it is", "[position][untangle]") {
   CHECK(st.lbfgs_iterations == 0);
 }
 
-TEST_CASE("a tet with its four vertices on one chart plane is flat: counted, left out, nothing moves for it", "[position][untangle]") {
+TEST_CASE("a tet with its four vertices on one chart plane is flat: counted, left out, nothing moves for it",
+          "[position][untangle]") {
   RowMatrixX3d X(4, 3);
   X << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1;
   RowMatrixX4i T(1, 4);

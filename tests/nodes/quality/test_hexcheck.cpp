@@ -1,17 +1,17 @@
 // Cross-check of hex_quality against the independent checker ../shared/tools/hexcheck.py.
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/formats/hexmesh_io.h"
+#include "nodes/formats/surface_io.h"
+#include "nodes/hex_from_tets/split.h"
+#include "nodes/quality/quality_json.h"
+#include "tests/helpers/hex_fixtures.h"
+
 #include <catch2/catch.hpp>
 
 #include <cstdio>
 #include <filesystem>
 #include <string>
 #include <unistd.h>
-
-#include "nodes/hex_from_tets/split.h"
-#include "nodes/formats/hexmesh_io.h"
-#include "nodes/formats/surface_io.h"
-#include "nodes/algorithms/hex_quality.h"
-#include "nodes/quality/quality_json.h"
-#include "tests/helpers/hex_fixtures.h"
 
 using namespace polyhex;
 using namespace polyhex::test;
@@ -55,7 +55,8 @@ struct TempDir {
 
 // hexcheck.py's JSON for a mesh file, optionally with a surface file.
 json hexcheck(const std::string& mesh_file, const std::string& surface_file) {
-  std::string cmd = kPython + " " + kHexcheck.string() + " " + mesh_file + " --json --samples " + std::to_string(kSamples);
+  std::string cmd =
+      kPython + " " + kHexcheck.string() + " " + mesh_file + " --json --samples " + std::to_string(kSamples);
   if (!surface_file.empty()) cmd += " --surface " + surface_file;
   const auto [out, status] = run(cmd);
   INFO("hexcheck output: " << out);
@@ -147,7 +148,8 @@ TEST_CASE("quality agrees with hexcheck.py on varied meshes", "[quality][hexchec
 
 TEST_CASE("quality agrees with hexcheck.py on a published hex mesh", "[quality][hexcheck][shared]") {
   const std::string why = missing_prerequisite();
-  const fs::path file = fs::path(POLYHEX_SHARED_DIR) / "data" / "reference_hex" / "tong2024_hybrid_octree" / "bunny.vtk";
+  const fs::path file =
+      fs::path(POLYHEX_SHARED_DIR) / "data" / "reference_hex" / "tong2024_hybrid_octree" / "bunny.vtk";
   if (!why.empty() || !fs::exists(file)) {
     WARN("skipping the hexcheck.py cross-check on " << file << ": " << (why.empty() ? "file missing" : why));
     SUCCEED();

@@ -1,3 +1,9 @@
+#include "graph/node.h"
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/algorithms/triangle_tree.h"
+#include "nodes/quality/quality_json.h"
+#include "tests/helpers/hex_fixtures.h"
+
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -5,12 +11,6 @@
 #include <cmath>
 #include <random>
 #include <set>
-
-#include "graph/node.h"
-#include "nodes/algorithms/hex_quality.h"
-#include "nodes/quality/quality_json.h"
-#include "nodes/algorithms/triangle_tree.h"
-#include "tests/helpers/hex_fixtures.h"
 
 using namespace polyhex;
 using namespace polyhex::test;
@@ -277,8 +277,7 @@ TEST_CASE("quality: invalid meshes are rejected with the reason", "[quality]") {
   SECTION("samples < 1") {
     QualityParams p;
     p.samples = 0;
-    CHECK_THROWS_MATCHES(hex_quality(m, nullptr, p), InvalidInput,
-                         Catch::Message("quality: samples = 0 must be >= 1"));
+    CHECK_THROWS_MATCHES(hex_quality(m, nullptr, p), InvalidInput, Catch::Message("quality: samples = 0 must be >= 1"));
   }
   SECTION("surface index out of range") {
     SurfaceMesh s = boundary_surface(m);
@@ -322,7 +321,7 @@ TEST_CASE("quality: the triangle tree finds the exact closest point", "[quality]
   for (Eigen::Index i = 0; i < V.size(); ++i) V.data()[i] = u(rng);
   RowMatrixX3i F(100, 3);
   for (int f = 0; f < 100; ++f) F.row(f) << 3 * f, 3 * f + 1, 3 * f + 2;
-  V.row(3 * 7 + 1) = V.row(3 * 7);                      // triangle 7: a zero-length edge
+  V.row(3 * 7 + 1) = V.row(3 * 7);                             // triangle 7: a zero-length edge
   V.row(3 * 9 + 2) = 0.5 * (V.row(3 * 9) + V.row(3 * 9 + 1));  // triangle 9: collinear corners
   const TriangleTree tree(V, F);
   for (int k = 0; k < 500; ++k) {
@@ -336,8 +335,8 @@ TEST_CASE("quality: the triangle tree finds the exact closest point", "[quality]
   }
   // Degenerate triangles: the closest point of a segment.
   const Eigen::Vector3d a(0, 0, 0), b(2, 0, 0);
-  CHECK((closest_point_on_triangle(Eigen::Vector3d(1, 1, 0), a, b, Eigen::Vector3d(1, 0, 0)) -
-         Eigen::Vector3d(1, 0, 0)).norm() < 1e-15);
+  CHECK((closest_point_on_triangle(Eigen::Vector3d(1, 1, 0), a, b, Eigen::Vector3d(1, 0, 0)) - Eigen::Vector3d(1, 0, 0))
+            .norm() < 1e-15);
   CHECK((closest_point_on_triangle(Eigen::Vector3d(3, 1, 0), a, a, b) - b).norm() < 1e-15);
   CHECK_THROWS_MATCHES(TriangleTree(V, RowMatrixX3i(0, 3)), InvalidInput,
                        Catch::Message("triangle tree: no triangles"));
@@ -400,8 +399,8 @@ TEST_CASE("quality: timing on 100k hexes and a 50k-triangle surface", "[.][quali
   const auto t0 = std::chrono::steady_clock::now();
   const HexQuality q = measure(g, &s, 100000);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  WARN("hex_quality: " << q.hexes << " hexes, " << s.F.rows() << " surface triangles, 100000 samples per side: "
-                       << seconds << " s");
+  WARN("hex_quality: " << q.hexes << " hexes, " << s.F.rows()
+                       << " surface triangles, 100000 samples per side: " << seconds << " s");
   CHECK(q.inverted == 0);
   CHECK(q.hausdorff_max < 0.05);
 }

@@ -1,19 +1,19 @@
 // Tests of the rotation-driven deformation (paper §4): building blocks, known answers on generated
 // shapes, failure paths, the node binding, and a [shared] run over real models.
-#include <catch2/catch.hpp>
+#include "graph/node.h"
+#include "nodes/algorithms/shapes.h"
+#include "nodes/formats/surface_io.h"
+#include "nodes/rotation_deform/rotation_deform.h"
+#include "nodes/tetrahedralize/tetgen.h"
+#include "runtime/errors.h"
 
 #include <Eigen/Geometry>
+#include <catch2/catch.hpp>
+
 #include <array>
 #include <cmath>
 #include <filesystem>
 #include <random>
-
-#include "graph/node.h"
-#include "nodes/rotation_deform/rotation_deform.h"
-#include "nodes/formats/surface_io.h"
-#include "nodes/algorithms/shapes.h"
-#include "nodes/tetrahedralize/tetgen.h"
-#include "runtime/errors.h"
 
 using namespace polyhex;
 
@@ -30,8 +30,7 @@ TetMesh box_mesh(int nx, int ny, int nz, double s = 1.0) {
   for (int z = 0; z <= nz; ++z)
     for (int y = 0; y <= ny; ++y)
       for (int x = 0; x <= nx; ++x) m.V.row(id(x, y, z)) << x * s, y * s, z * s;
-  const std::array<std::array<int, 3>, 6> perms = {
-      {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
+  const std::array<std::array<int, 3>, 6> perms = {{{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
   std::vector<std::array<int, 4>> tets;
   for (int z = 0; z < nz; ++z)
     for (int y = 0; y < ny; ++y)
@@ -71,8 +70,7 @@ double signed_volume(const TetMesh& m) {
 /// The 24 proper cube symmetries (signed permutation matrices with det +1).
 std::vector<Eigen::Matrix3d> cube_symmetries() {
   std::vector<Eigen::Matrix3d> out;
-  const std::array<std::array<int, 3>, 6> perms = {
-      {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
+  const std::array<std::array<int, 3>, 6> perms = {{{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
   for (auto& p : perms)
     for (int s = 0; s < 8; ++s) {
       Eigen::Matrix3d P = Eigen::Matrix3d::Zero();
@@ -154,8 +152,7 @@ TEST_CASE("rotation: boundary faces of a box are the outward surface triangles",
   CHECK(F.rows() == 2 * 2 * (4 * 3 + 3 * 2 + 4 * 2));
   // Divergence theorem: sum of (a . (b x c)) / 6 over outward faces = enclosed volume.
   double vol = 0;
-  for (int f = 0; f < F.rows(); ++f)
-    vol += box.V.row(F(f, 0)).dot(box.V.row(F(f, 1)).cross(box.V.row(F(f, 2)))) / 6;
+  for (int f = 0; f < F.rows(); ++f) vol += box.V.row(F(f, 0)).dot(box.V.row(F(f, 1)).cross(box.V.row(F(f, 2)))) / 6;
   CHECK(vol == Approx(2.0 * 1.5 * 1.0).epsilon(1e-12));
   CHECK(signed_volume(box) == Approx(3.0).epsilon(1e-12));
   CHECK(axis_alignment(box.V, F) == Approx(1.0));
@@ -259,7 +256,8 @@ TEST_CASE("rotation: the surface flattening removes a bump the paper's Eq. 1 kee
   paper.flatten = 0;
   const auto rp = rotation_deform(box, paper);
   const auto rf = rotation_deform(box, flat);
-  INFO("bump height: input " << height0 << ", paper " << bump_height(rp.mesh) << ", flattened " << bump_height(rf.mesh));
+  INFO("bump height: input " << height0 << ", paper " << bump_height(rp.mesh) << ", flattened "
+                             << bump_height(rf.mesh));
   CHECK(bump_height(rf.mesh) < 0.25 * height0);
   CHECK(bump_height(rp.mesh) > 0.5 * height0);
   CHECK(rf.iterations.back().alignment > 0.95);
@@ -440,8 +438,8 @@ const std::vector<ModelRun>& shared_model_runs() {
     std::vector<ModelRun> out;
     const auto dir = std::filesystem::path(POLYHEX_SHARED_DIR) / "data" / "surfaces";
     if (!std::filesystem::exists(dir)) return out;
-    for (const char* file : {"bunny.off", "fandisk.off", "rockerarm.obj", "fertility.off", "bumpy_torus.obj",
-                             "casting.off"}) {
+    for (const char* file :
+         {"bunny.off", "fandisk.off", "rockerarm.obj", "fertility.off", "bumpy_torus.obj", "casting.off"}) {
       TetgenParams tp;
       tp.edge_length = 0.04;
       const TetMesh tets = tetrahedralize(read_surface(dir / file), tp);

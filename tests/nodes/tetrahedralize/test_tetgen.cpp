@@ -1,3 +1,9 @@
+#include "graph/node.h"
+#include "nodes/algorithms/shapes.h"
+#include "nodes/tetrahedralize/tetgen.h"
+#include "runtime/errors.h"
+#include "tests/helpers/surface_checks.h"
+
 #include <catch2/catch.hpp>
 
 #include <array>
@@ -8,12 +14,6 @@
 #include <map>
 #include <sstream>
 
-#include "graph/node.h"
-#include "nodes/algorithms/shapes.h"
-#include "nodes/tetrahedralize/tetgen.h"
-#include "runtime/errors.h"
-#include "tests/helpers/surface_checks.h"
-
 using namespace polyhex;
 using namespace polyhex::test;
 
@@ -21,10 +21,10 @@ namespace {
 
 /// What the tests check on a tet mesh, computed here independently of tet_stats.
 struct TetCheck {
-  long nonpositive = 0;   ///< tets with volume <= 1e-14 diag^3
-  long unused = 0;        ///< vertices used by no tet
-  double volume = 0;      ///< sum of tet volumes
-  SurfaceMesh boundary;   ///< faces used by exactly one tet, oriented outward
+  long nonpositive = 0;  ///< tets with volume <= 1e-14 diag^3
+  long unused = 0;       ///< vertices used by no tet
+  double volume = 0;     ///< sum of tet volumes
+  SurfaceMesh boundary;  ///< faces used by exactly one tet, oriented outward
 };
 
 TetCheck check_tets(const TetMesh& m) {
@@ -233,9 +233,9 @@ TEST_CASE("tetgen: a self-intersecting surface is an InvalidInput naming the sou
   both.F.resize(24, 3);
   both.F << a.F, (b.F.array() + 8).matrix();
   CHECK_THROWS_AS(tetrahedralize(both, TetgenParams{}), InvalidInput);
-  CHECK_THROWS_WITH(tetrahedralize(both, TetgenParams{}),
-                    Catch::StartsWith("two_boxes.off: ") && Catch::Contains("intersects itself") &&
-                        Catch::Contains("TetGen code 3"));
+  CHECK_THROWS_WITH(tetrahedralize(both, TetgenParams{}), Catch::StartsWith("two_boxes.off: ") &&
+                                                              Catch::Contains("intersects itself") &&
+                                                              Catch::Contains("TetGen code 3"));
 }
 
 TEST_CASE("tetgen: malformed surfaces are rejected before TetGen runs", "[tetgen]") {
@@ -313,7 +313,8 @@ TEST_CASE("tetgen on the shared surfaces", "[tetgen][shared]") {
   }
   SECTION("girl.off intersects itself") {
     SurfaceMesh girl = read_fixture(dir / "girl.off");
-    CHECK_THROWS_WITH(tetrahedralize(girl, TetgenParams{}),
-                      Catch::StartsWith((dir / "girl.off").string() + ": the surface intersects itself (TetGen code 3)"));
+    CHECK_THROWS_WITH(
+        tetrahedralize(girl, TetgenParams{}),
+        Catch::StartsWith((dir / "girl.off").string() + ": the surface intersects itself (TetGen code 3)"));
   }
 }

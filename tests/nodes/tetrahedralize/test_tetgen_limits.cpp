@@ -1,16 +1,15 @@
 // tetrahedralize/tetgen: the size estimate and the refusal of requests far beyond the machine, and
 // scale invariance (a model scaled by 1e-9 or 1e9 gives the same tets as at unit scale).
-#include <catch2/catch.hpp>
-
-#include <unistd.h>
-
-#include <chrono>
-#include <cmath>
-
 #include "graph/node.h"
 #include "nodes/algorithms/shapes.h"
 #include "nodes/tetrahedralize/tetgen.h"
 #include "runtime/errors.h"
+
+#include <catch2/catch.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <unistd.h>
 
 using namespace polyhex;
 using Catch::Matchers::Contains;
@@ -58,10 +57,9 @@ TEST_CASE("tetgen: a request far beyond max_tets is refused up front with the es
   REQUIRE(est.tets > 5e7);
   const auto t0 = std::chrono::steady_clock::now();
   REQUIRE_THROWS_AS(tetrahedralize(box, p), InvalidInput);
-  REQUIRE_THROWS_WITH(tetrahedralize(box, p), Catch::StartsWith("box.obj: refused: edge_length 0.002") &&
-                                                  Contains("would give about") &&
-                                                  Contains("more than max_tets = 20000000") &&
-                                                  Contains("use edge_length >= "));
+  REQUIRE_THROWS_WITH(tetrahedralize(box, p),
+                      Catch::StartsWith("box.obj: refused: edge_length 0.002") && Contains("would give about") &&
+                          Contains("more than max_tets = 20000000") && Contains("use edge_length >= "));
   CHECK(seconds_since(t0) < 1.0);  // refused, not attempted
   // The suggested edge_length fits under the limit.
   try {
@@ -101,7 +99,8 @@ TEST_CASE("tetgen: all vertices at one point or an overflowing box are refused",
   SurfaceMesh s = make_shape({"box", 8});
   s.source = "point.obj";
   s.V.setConstant(0.5);
-  CHECK_THROWS_WITH(tetrahedralize(s, TetgenParams{}), "point.obj: all vertices are at one point (bounding-box diagonal 0)");
+  CHECK_THROWS_WITH(tetrahedralize(s, TetgenParams{}),
+                    "point.obj: all vertices are at one point (bounding-box diagonal 0)");
   SurfaceMesh big = make_shape({"box", 8});
   big.source = "big.obj";
   big.V *= 1e300;
