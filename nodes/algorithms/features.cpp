@@ -202,143 +202,195 @@ Vec3 closest_on_line(const std::vector<Vec3>& line, const Vec3& x, Vec3* tangent
   return out;
 }
 
-CreaseSnap snap_to_creases(const RowMatrixX3d& V, const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>& Q,
-                           const SurfaceCreases& creases, double reach) {
-  const int nv = int(V.rows());
-  CreaseSnap out;
-  out.line.assign(size_t(nv), -1);
-  out.corner.assign(size_t(nv), -1);
-  std::vector<std::vector<int>> adj(static_cast<size_t>(nv));
-  std::vector<char> on_boundary(size_t(nv), 0);
-  for (Eigen::Index q = 0; q < Q.rows(); ++q)
-    for (int k = 0; k < 4; ++k) {
-      const int a = Q(q, k), b = Q(q, (k + 1) % 4);
-      on_boundary[size_t(a)] = 1;
-      adj[size_t(a)].push_back(b);
-      adj[size_t(b)].push_back(a);
-    }
-  std::vector<int> bverts;
-  for (int v = 0; v < nv; ++v)
-    if (on_boundary[size_t(v)]) {
-      auto& a = adj[size_t(v)];
-      std::sort(a.begin(), a.end());
-      a.erase(std::unique(a.begin(), a.end()), a.end());
-      bverts.push_back(v);
-    }
-  auto pos = [&](int v) { return Vec3(V.row(v).transpose()); };
-  auto nearest = [&](const Vec3& p, const std::vector<int>& among) {
+namespace {
+
+using QuadMatrix = Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>;
+
+/// snap_to_creases() as its steps: the boundary graph, the corners, then each crease line's path.
+class CreaseSnapper {
+ public:
+  CreaseSnapper(const RowMatrixX3d& V, const QuadMatrix& Q, const SurfaceCreases& creases, double reach)
+      : V_(V), Q_(Q), creases_(creases), reach_(reach), nv_(int(V.rows())) {}
+
+  CreaseSnap run() {
+    out_.line.assign(size_t(nv_), -1);
+    out_.corner.assign(size_t(nv_), -1);
+    boundary_graph();
+    snap_corners();
+    dist_.assign(size_t(nv_), std::numeric_limits<double>::infinity());
+    cost_.resize(size_t(nv_));
+    from_.assign(size_t(nv_), -1);
+    blocked_.assign(size_t(nv_), 0);
+    for (size_t l = 0; l < creases_.lines.size(); ++l) snap_line(l);
+    for (int v = 0; v < nv_; ++v) out_.vertices += out_.line[size_t(v)] >= 0 || out_.corner[size_t(v)] >= 0;
+    return std::move(out_);
+  }
+
+ private:
+  Vec3 pos(int v) const { return Vec3(V_.row(v).transpose()); }
+
+  /// The boundary vertices and their neighbours along boundary quad edges.
+  void boundary_graph() {
+    adj_.assign(size_t(nv_), {});
+    std::vector<char> on_boundary(size_t(nv_), 0);
+    for (Eigen::Index q = 0; q < Q_.rows(); ++q)
+      for (int k = 0; k < 4; ++k) {
+        const int a = Q_(q, k), b = Q_(q, (k + 1) % 4);
+        on_boundary[size_t(a)] = 1;
+        adj_[size_t(a)].push_back(b);
+        adj_[size_t(b)].push_back(a);
+      }
+    for (int v = 0; v < nv_; ++v)
+      if (on_boundary[size_t(v)]) {
+        auto& a = adj_[size_t(v)];
+        std::sort(a.begin(), a.end());
+        a.erase(std::unique(a.begin(), a.end()), a.end());
+        bverts_.push_back(v);
+      }
+  }
+
+  /// The vertex of `among` nearest to `p` within reach (the last of equals), -1 if none.
+  int nearest(const Vec3& p, const std::vector<int>& among) const {
     int best = -1;
-    double bd = reach * reach;
+    double bd = reach_ * reach_;
     for (int v : among) {
       const double d = (pos(v) - p).squaredNorm();
       if (d <= bd) bd = d, best = v;
     }
     return best;
-  };
-  // corners first: each takes its nearest boundary vertex within reach, unless another corner has it
-  std::vector<int> corner_vertex(creases.corners.size(), -1);
-  for (size_t c = 0; c < creases.corners.size(); ++c) {
-    const int v = nearest(creases.corners[c], bverts);
-    if (v >= 0 && out.corner[size_t(v)] < 0) corner_vertex[c] = v, out.corner[size_t(v)] = int(c);
   }
-  std::vector<double> dist(size_t(nv), std::numeric_limits<double>::infinity());
-  std::vector<double> cost(static_cast<size_t>(nv));
-  std::vector<int> from(size_t(nv), -1);
-  std::vector<char> blocked(size_t(nv), 0);
-  for (size_t l = 0; l < creases.lines.size(); ++l) {
-    const auto& line = creases.lines[l];
-    const double L = line_length(line);
+
+  /// Corners first: each takes its nearest boundary vertex within reach, unless another corner has it.
+  void snap_corners() {
+    corner_vertex_.assign(creases_.corners.size(), -1);
+    for (size_t c = 0; c < creases_.corners.size(); ++c) {
+      const int v = nearest(creases_.corners[c], bverts_);
+      if (v >= 0 && out_.corner[size_t(v)] < 0) corner_vertex_[c] = v, out_.corner[size_t(v)] = int(c);
+    }
+  }
+
+  /// The boundary vertices within reach of the line, with their distance to it in dist_.
+  std::vector<int> near_line(const std::vector<Vec3>& line) {
     Eigen::AlignedBox3d box;
     for (const Vec3& p : line) box.extend(p);
-    box.min().array() -= reach;
-    box.max().array() += reach;
+    box.min().array() -= reach_;
+    box.max().array() += reach_;
     std::vector<int> near;
-    for (int v : bverts) {
+    for (int v : bverts_) {
       if (!box.contains(pos(v))) continue;
       const double d = (closest_on_line(line, pos(v)) - pos(v)).norm();
-      if (d <= reach) near.push_back(v), dist[size_t(v)] = d;
+      if (d <= reach_) near.push_back(v), dist_[size_t(v)] = d;
     }
+    return near;
+  }
+
+  /// Dijkstra from s to t over `near`, avoiding blocked vertices; the path, empty if none.
+  std::vector<int> path_between(int s, int t, const std::vector<int>& near) {
+    std::vector<int> path;
+    for (int v : near) cost_[size_t(v)] = std::numeric_limits<double>::infinity(), from_[size_t(v)] = -1;
+    using QE = std::pair<double, int>;
+    std::priority_queue<QE, std::vector<QE>, std::greater<QE>> pq;
+    cost_[size_t(s)] = 0;
+    pq.push({0.0, s});
+    while (!pq.empty()) {
+      auto [c, v] = pq.top();
+      pq.pop();
+      if (c > cost_[size_t(v)]) continue;
+      if (v == t) break;
+      for (int w : adj_[size_t(v)]) {
+        if (!std::isfinite(dist_[size_t(w)]) || (blocked_[size_t(w)] && w != t)) continue;
+        const double e = (pos(w) - pos(v)).norm() * (1.0 + 8.0 * 0.5 * (dist_[size_t(v)] + dist_[size_t(w)]) / reach_);
+        if (c + e < cost_[size_t(w)]) cost_[size_t(w)] = c + e, from_[size_t(w)] = v, pq.push({c + e, w});
+      }
+    }
+    if (!std::isfinite(cost_[size_t(t)])) return path;
+    for (int v = t; v >= 0; v = from_[size_t(v)]) {
+      path.push_back(v);
+      if (v == s) break;
+    }
+    std::reverse(path.begin(), path.end());
+    return path;
+  }
+
+  /// Line l's candidate path: between its end vertices (an open line, ends at its corners' vertices where they
+  /// have one) or a loop through its start and middle (a closed line); empty if none.
+  std::vector<int> candidate_path(size_t l, const std::vector<int>& near) {
+    const auto& line = creases_.lines[l];
+    if (near.size() < 2) return {};
     auto end_vertex = [&](int corner, const Vec3& p) {
-      if (corner >= 0 && corner_vertex[size_t(corner)] >= 0) return corner_vertex[size_t(corner)];
+      if (corner >= 0 && corner_vertex_[size_t(corner)] >= 0) return corner_vertex_[size_t(corner)];
       return nearest(p, near);
     };
-    // Dijkstra from s to t over `near`, avoiding blocked vertices; returns the path (empty if none)
-    auto path_between = [&](int s, int t) {
-      std::vector<int> path;
-      for (int v : near) cost[size_t(v)] = std::numeric_limits<double>::infinity(), from[size_t(v)] = -1;
-      using QE = std::pair<double, int>;
-      std::priority_queue<QE, std::vector<QE>, std::greater<QE>> pq;
-      cost[size_t(s)] = 0;
-      pq.push({0.0, s});
-      while (!pq.empty()) {
-        auto [c, v] = pq.top();
-        pq.pop();
-        if (c > cost[size_t(v)]) continue;
-        if (v == t) break;
-        for (int w : adj[size_t(v)]) {
-          if (!std::isfinite(dist[size_t(w)]) || (blocked[size_t(w)] && w != t)) continue;
-          const double e = (pos(w) - pos(v)).norm() * (1.0 + 8.0 * 0.5 * (dist[size_t(v)] + dist[size_t(w)]) / reach);
-          if (c + e < cost[size_t(w)]) cost[size_t(w)] = c + e, from[size_t(w)] = v, pq.push({c + e, w});
-        }
-      }
-      if (!std::isfinite(cost[size_t(t)])) return path;
-      for (int v = t; v >= 0; v = from[size_t(v)]) {
-        path.push_back(v);
-        if (v == s) break;
-      }
-      std::reverse(path.begin(), path.end());
-      return path;
-    };
-    std::vector<int> path;
-    bool ok = near.size() >= 2;
-    if (ok && !creases.closed[l]) {
-      const int s = end_vertex(creases.start_corner[l], line.front());
-      const int t = end_vertex(creases.end_corner[l], line.back());
-      ok = s >= 0 && t >= 0 && s != t && std::isfinite(dist[size_t(s)]) && std::isfinite(dist[size_t(t)]);
-      if (ok) path = path_between(s, t);
-    } else if (ok) {
-      const int s = nearest(line.front(), near), m = nearest(point_at(line, 0.5 * L), near);
-      ok = s >= 0 && m >= 0 && s != m;
-      if (ok) {
-        path = path_between(s, m);
-        for (size_t k = 1; k + 1 < path.size(); ++k) blocked[size_t(path[k])] = 1;
-        std::vector<int> back = path.empty() ? std::vector<int>{} : path_between(m, s);
-        for (size_t k = 1; k + 1 < path.size(); ++k) blocked[size_t(path[k])] = 0;
-        if (back.size() < 2)
-          path.clear();
-        else
-          path.insert(path.end(), back.begin() + 1, back.end() - 1);
-      }
+    if (!creases_.closed[l]) {
+      const int s = end_vertex(creases_.start_corner[l], line.front());
+      const int t = end_vertex(creases_.end_corner[l], line.back());
+      const bool ok = s >= 0 && t >= 0 && s != t && std::isfinite(dist_[size_t(s)]) && std::isfinite(dist_[size_t(t)]);
+      return ok ? path_between(s, t, near) : std::vector<int>{};
     }
-    ok = ok && path.size() >= 2;
-    if (ok) {  // length, claims, and no quad with three vertices on the path (a staircase across quads)
-      double len = 0;
-      for (size_t k = 1; k < path.size(); ++k) len += (pos(path[k]) - pos(path[k - 1])).norm();
-      ok = len <= 2.0 * L + 2.0 * reach;
-      for (size_t k = 0; ok && k < path.size(); ++k) {
-        const int v = path[size_t(k)];
-        if (blocked[size_t(v)]) ok = false;  // on an accepted line (blocked is set with out.line)
-        const bool end = !creases.closed[l] && (k == 0 || k + 1 == path.size());
-        if (out.corner[size_t(v)] >= 0 && !end) ok = false;
-      }
-      if (ok) {
-        std::vector<char> on(size_t(nv), 0);
-        for (int v : path) on[size_t(v)] = 1;
-        for (Eigen::Index q = 0; ok && q < Q.rows(); ++q)
-          if (on[size_t(Q(q, 0))] + on[size_t(Q(q, 1))] + on[size_t(Q(q, 2))] + on[size_t(Q(q, 3))] >= 3) ok = false;
-      }
-    }
-    for (int v : near) dist[size_t(v)] = std::numeric_limits<double>::infinity();
-    if (!ok) {
-      ++out.lines_skipped;
-      continue;
-    }
-    ++out.lines_snapped;
-    for (int v : path)
-      if (out.corner[size_t(v)] < 0) out.line[size_t(v)] = int(l), blocked[size_t(v)] = 1;
+    const int s = nearest(line.front(), near), m = nearest(point_at(line, 0.5 * line_length(line)), near);
+    if (s < 0 || m < 0 || s == m) return {};
+    std::vector<int> path = path_between(s, m, near);
+    for (size_t k = 1; k + 1 < path.size(); ++k) blocked_[size_t(path[k])] = 1;
+    std::vector<int> back = path.empty() ? std::vector<int>{} : path_between(m, s, near);
+    for (size_t k = 1; k + 1 < path.size(); ++k) blocked_[size_t(path[k])] = 0;
+    if (back.size() < 2) return {};
+    path.insert(path.end(), back.begin() + 1, back.end() - 1);
+    return path;
   }
-  for (int v = 0; v < nv; ++v) out.vertices += out.line[size_t(v)] >= 0 || out.corner[size_t(v)] >= 0;
-  return out;
+
+  /// The path's length, its claims, and no quad with three vertices on it (a staircase across quads).
+  bool acceptable(size_t l, const std::vector<int>& path) const {
+    if (path.size() < 2) return false;
+    double len = 0;
+    for (size_t k = 1; k < path.size(); ++k) len += (pos(path[k]) - pos(path[k - 1])).norm();
+    if (len > 2.0 * line_length(creases_.lines[l]) + 2.0 * reach_) return false;
+    for (size_t k = 0; k < path.size(); ++k) {
+      const int v = path[size_t(k)];
+      if (blocked_[size_t(v)]) return false;  // on an accepted line (blocked is set with out.line)
+      const bool end = !creases_.closed[l] && (k == 0 || k + 1 == path.size());
+      if (out_.corner[size_t(v)] >= 0 && !end) return false;
+    }
+    std::vector<char> on(size_t(nv_), 0);
+    for (int v : path) on[size_t(v)] = 1;
+    for (Eigen::Index q = 0; q < Q_.rows(); ++q)
+      if (on[size_t(Q_(q, 0))] + on[size_t(Q_(q, 1))] + on[size_t(Q_(q, 2))] + on[size_t(Q_(q, 3))] >= 3) return false;
+    return true;
+  }
+
+  void snap_line(size_t l) {
+    const std::vector<int> near = near_line(creases_.lines[l]);
+    const std::vector<int> path = candidate_path(l, near);
+    const bool ok = acceptable(l, path);
+    for (int v : near) dist_[size_t(v)] = std::numeric_limits<double>::infinity();
+    if (!ok) {
+      ++out_.lines_skipped;
+      return;
+    }
+    ++out_.lines_snapped;
+    for (int v : path)
+      if (out_.corner[size_t(v)] < 0) out_.line[size_t(v)] = int(l), blocked_[size_t(v)] = 1;
+  }
+
+  const RowMatrixX3d& V_;
+  const QuadMatrix& Q_;
+  const SurfaceCreases& creases_;
+  const double reach_;
+  const int nv_;
+  CreaseSnap out_;
+  std::vector<std::vector<int>> adj_;
+  std::vector<int> bverts_;
+  std::vector<int> corner_vertex_;
+  std::vector<double> dist_;  ///< distance to the current line, infinite off it
+  std::vector<double> cost_;
+  std::vector<int> from_;
+  std::vector<char> blocked_;  ///< on an accepted line, or on the first half of the current loop
+};
+
+}  // namespace
+
+CreaseSnap snap_to_creases(const RowMatrixX3d& V, const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>& Q,
+                           const SurfaceCreases& creases, double reach) {
+  return CreaseSnapper(V, Q, creases, reach).run();
 }
 
 }  // namespace polyhex

@@ -630,152 +630,192 @@ CellsRead read_medit_cells(const std::filesystem::path& path, const std::string&
   return r;
 }
 
+namespace {
+
+/// read_gmsh_cells() as its sections: the format line, $Nodes, $Elements (2.2 or 4.1), others skipped.
+class GmshReader {
+ public:
+  GmshReader(const std::string& data, const std::string& file, int gmsh_type, int nodes)
+      : file_(file), c_(data, file), gmsh_type_(gmsh_type), nodes_(nodes) {}
+
+  CellsRead read() {
+    read_format();
+    bool have_nodes = false, have_elements = false;
+    while (c_.next_line(l_)) {
+      if (l_.empty() || l_[0] != '$') c_.fail("expected a section such as $Nodes, got `" + std::string(l_) + "`");
+      const std::string name(l_.substr(1));
+      if (name == "Nodes") {
+        v2_ ? read_nodes_v2() : read_nodes_v41();
+        expect_end("$EndNodes");
+        have_nodes = true;
+      } else if (name == "Elements") {
+        v2_ ? read_elements_v2() : read_elements_v41();
+        expect_end("$EndElements");
+        have_elements = true;
+      } else {
+        skip_section("$End" + name);
+      }
+    }
+    if (!have_nodes) throw IOError(file_ + ": no $Nodes section");
+    if (!have_elements) throw IOError(file_ + ": no $Elements section");
+    return result();
+  }
+
+ private:
+  void expect_line(const std::string& what) {
+    if (!c_.next_line(l_)) c_.fail("truncated: unexpected end of file (expected " + what + ")");
+    io_detail::split_blanks(l_, w_);
+  }
+
+  void expect_end(const std::string& end) {
+    expect_line(end);
+    if (l_ != end) c_.fail("expected " + end + ", got `" + std::string(l_) + "` (wrong counts?)");
+  }
+
+  void read_format() {
+    expect_line("$MeshFormat");
+    if (l_ != "$MeshFormat") c_.fail("not a Gmsh file (expected `$MeshFormat`, got `" + std::string(l_) + "`)");
+    expect_line("version line");
+    double version;
+    long long filetype;
+    if (w_.size() < 3 || !io_detail::parse_double(w_[0], version) || !io_detail::parse_int(w_[1], filetype))
+      c_.fail("expected `version file-type data-size`");
+    if (filetype != 0) c_.fail("binary .msh files are not supported (write ASCII)");
+    v2_ = version >= 2.0 && version < 3.0;
+    const bool v41 = version >= 4.1 && version < 5.0;
+    if (!v2_ && !v41) c_.fail("Gmsh format version " + std::string(w_[0]) + " is not supported (use 2.2 or 4.1)");
+    expect_line("$EndMeshFormat");
+    if (l_ != "$EndMeshFormat") c_.fail("expected $EndMeshFormat");
+  }
+
+  void add_node(long long tag, std::string_view line_text) {
+    io_detail::split_blanks(line_text, w_);
+    if (w_.size() < 3) c_.fail("expected node coordinates x y z");
+    double x[3];
+    for (int k = 0; k < 3; ++k) {
+      if (!io_detail::parse_double(w_[k], x[k]))
+        c_.fail("expected a node coordinate, got `" + std::string(w_[k]) + "`");
+      if (!std::isfinite(x[k])) c_.fail("node " + std::to_string(tag) + " has a non-finite coordinate");
+    }
+    if (!node_index_.emplace(tag, int(xyz_.size() / 3)).second)
+      c_.fail("node tag " + std::to_string(tag) + " repeated");
+    xyz_.insert(xyz_.end(), x, x + 3);
+  }
+
+  /// One element of `type` with node tags `tags[0..n)`: kept when of the type read, counted otherwise.
+  void add_element(long long type, const std::string_view* tags, size_t n) {
+    if (type != gmsh_type_) {
+      ++ignored_[type];
+      return;
+    }
+    if (n != size_t(nodes_))
+      c_.fail("element of type " + std::to_string(type) + " has " + std::to_string(n) + " nodes, expected " +
+              std::to_string(nodes_));
+    for (size_t k = 0; k < n; ++k) {
+      long long t;
+      if (!io_detail::parse_int(tags[k], t)) c_.fail("expected a node tag, got `" + std::string(tags[k]) + "`");
+      raw_.push_back(t);
+    }
+    raw_line_.push_back(c_.line_no());
+  }
+
+  void read_nodes_v2() {
+    expect_line("number of nodes");
+    long long n = count_field(c_, w_, 0, "number of nodes");
+    for (long long i = 0; i < n; ++i) {
+      expect_line("node");
+      long long tag;
+      if (!io_detail::parse_int(w_[0], tag)) c_.fail("expected a node tag, got `" + std::string(w_[0]) + "`");
+      add_node(tag, l_.substr(size_t(w_[0].data() + w_[0].size() - l_.data())));
+    }
+  }
+
+  void read_nodes_v41() {
+    expect_line("$Nodes header");
+    long long blocks = count_field(c_, w_, 0, "number of node blocks");
+    for (long long b = 0; b < blocks; ++b) {
+      expect_line("node block header");
+      long long count = count_field(c_, w_, 3, "number of nodes in block");
+      std::vector<long long> tags;
+      tags.reserve(c_.reserve_hint(count, 2));
+      for (long long k = 0; k < count; ++k) tags.push_back(c_.integer("node tag"));
+      for (auto t : tags) {
+        expect_line("node coordinates");
+        add_node(t, l_);
+      }
+    }
+  }
+
+  void read_elements_v2() {
+    expect_line("number of elements");
+    long long n = count_field(c_, w_, 0, "number of elements");
+    for (long long i = 0; i < n; ++i) {
+      expect_line("element");
+      long long type, ntags;
+      if (w_.size() < 3 || !io_detail::parse_int(w_[1], type) || !io_detail::parse_int(w_[2], ntags) || ntags < 0 ||
+          w_.size() < size_t(3 + ntags))
+        c_.fail("expected `tag type ntags tags... nodes...`");
+      add_element(type, w_.data() + 3 + ntags, w_.size() - size_t(3 + ntags));
+    }
+  }
+
+  void read_elements_v41() {
+    expect_line("$Elements header");
+    long long blocks = count_field(c_, w_, 0, "number of element blocks");
+    for (long long b = 0; b < blocks; ++b) {
+      expect_line("element block header");
+      long long type, count;
+      if (w_.size() < 4 || !io_detail::parse_int(w_[2], type) || !io_detail::parse_int(w_[3], count) || count < 0)
+        c_.fail("expected `entity-dim entity-tag element-type count`");
+      for (long long i = 0; i < count; ++i) {
+        expect_line("element");
+        add_element(type, w_.data() + 1, w_.size() - 1);
+      }
+    }
+  }
+
+  void skip_section(const std::string& end) {
+    while (c_.next_line(l_))
+      if (l_ == end) return;
+    c_.fail("truncated: no " + end);
+  }
+
+  CellsRead result() {
+    CellsRead r;
+    r.V = to_matrix(xyz_);
+    r.cells.resize(raw_.size());
+    for (size_t i = 0; i < raw_.size(); ++i) {
+      auto it = node_index_.find(raw_[i]);
+      if (it == node_index_.end())
+        throw IOError(file_ + ": line " + std::to_string(raw_line_[i / size_t(nodes_)]) + ": element node tag " +
+                      std::to_string(raw_[i]) + " is not a node (" + vertex_count(xyz_.size() / 3) + ")");
+      r.cells[i] = it->second;
+    }
+    for (auto& [type, n] : ignored_)
+      r.warnings.push_back(file_ + ": ignored " + plural(n, "element") + " of Gmsh type " + std::to_string(type) +
+                           " (only type " + std::to_string(gmsh_type_) + " is read)");
+    return r;
+  }
+
+  const std::string& file_;
+  TextCursor c_;
+  const int gmsh_type_, nodes_;
+  bool v2_ = false;
+  std::string_view l_;
+  std::vector<std::string_view> w_;
+  std::unordered_map<long long, int> node_index_;
+  std::vector<double> xyz_;
+  std::vector<long long> raw_;  ///< node tags of kept elements
+  std::vector<int> raw_line_;   ///< line of each kept element
+  std::map<long long, size_t> ignored_;
+};
+
+}  // namespace
+
 CellsRead read_gmsh_cells(const std::filesystem::path& path, int gmsh_type, int nodes) {
   const std::string file = path.string();
   const std::string data = io_detail::load_file(path);
-  TextCursor c(data, file);
-  std::string_view l;
-  std::vector<std::string_view> w;
-  auto expect_line = [&](const std::string& what) {
-    if (!c.next_line(l)) c.fail("truncated: unexpected end of file (expected " + what + ")");
-    io_detail::split_blanks(l, w);
-  };
-  expect_line("$MeshFormat");
-  if (l != "$MeshFormat") c.fail("not a Gmsh file (expected `$MeshFormat`, got `" + std::string(l) + "`)");
-  expect_line("version line");
-  double version;
-  long long filetype;
-  if (w.size() < 3 || !io_detail::parse_double(w[0], version) || !io_detail::parse_int(w[1], filetype))
-    c.fail("expected `version file-type data-size`");
-  if (filetype != 0) c.fail("binary .msh files are not supported (write ASCII)");
-  const bool v2 = version >= 2.0 && version < 3.0;
-  const bool v41 = version >= 4.1 && version < 5.0;
-  if (!v2 && !v41) c.fail("Gmsh format version " + std::string(w[0]) + " is not supported (use 2.2 or 4.1)");
-  expect_line("$EndMeshFormat");
-  if (l != "$EndMeshFormat") c.fail("expected $EndMeshFormat");
-
-  std::unordered_map<long long, int> node_index;
-  std::vector<double> xyz;
-  std::vector<long long> raw;  // node tags of kept elements
-  std::vector<int> raw_line;   // line of each kept element
-  std::map<long long, size_t> ignored;
-  bool have_nodes = false, have_elements = false;
-
-  auto add_node = [&](long long tag, std::string_view line_text) {
-    io_detail::split_blanks(line_text, w);
-    if (w.size() < 3) c.fail("expected node coordinates x y z");
-    double x[3];
-    for (int k = 0; k < 3; ++k) {
-      if (!io_detail::parse_double(w[k], x[k])) c.fail("expected a node coordinate, got `" + std::string(w[k]) + "`");
-      if (!std::isfinite(x[k])) c.fail("node " + std::to_string(tag) + " has a non-finite coordinate");
-    }
-    if (!node_index.emplace(tag, int(xyz.size() / 3)).second) c.fail("node tag " + std::to_string(tag) + " repeated");
-    xyz.insert(xyz.end(), x, x + 3);
-  };
-  // Element `tokens` = node tags of one element of `type`.
-  auto add_element = [&](long long type, const std::string_view* tags, size_t n) {
-    if (type != gmsh_type) {
-      ++ignored[type];
-      return;
-    }
-    if (n != size_t(nodes))
-      c.fail("element of type " + std::to_string(type) + " has " + std::to_string(n) + " nodes, expected " +
-             std::to_string(nodes));
-    for (size_t k = 0; k < n; ++k) {
-      long long t;
-      if (!io_detail::parse_int(tags[k], t)) c.fail("expected a node tag, got `" + std::string(tags[k]) + "`");
-      raw.push_back(t);
-    }
-    raw_line.push_back(c.line_no());
-  };
-
-  while (c.next_line(l)) {
-    if (l.empty() || l[0] != '$') c.fail("expected a section such as $Nodes, got `" + std::string(l) + "`");
-    const std::string name(l.substr(1));
-    if (name == "Nodes") {
-      if (v2) {
-        expect_line("number of nodes");
-        long long n = count_field(c, w, 0, "number of nodes");
-        for (long long i = 0; i < n; ++i) {
-          expect_line("node");
-          long long tag;
-          if (!io_detail::parse_int(w[0], tag)) c.fail("expected a node tag, got `" + std::string(w[0]) + "`");
-          add_node(tag, l.substr(size_t(w[0].data() + w[0].size() - l.data())));
-        }
-      } else {
-        expect_line("$Nodes header");
-        long long blocks = count_field(c, w, 0, "number of node blocks");
-        for (long long b = 0; b < blocks; ++b) {
-          expect_line("node block header");
-          long long count = count_field(c, w, 3, "number of nodes in block");
-          std::vector<long long> tags;
-          tags.reserve(c.reserve_hint(count, 2));
-          for (long long k = 0; k < count; ++k) tags.push_back(c.integer("node tag"));
-          for (auto t : tags) {
-            expect_line("node coordinates");
-            add_node(t, l);
-          }
-        }
-      }
-      expect_line("$EndNodes");
-      if (l != "$EndNodes") c.fail("expected $EndNodes, got `" + std::string(l) + "` (wrong counts?)");
-      have_nodes = true;
-    } else if (name == "Elements") {
-      if (v2) {
-        expect_line("number of elements");
-        long long n = count_field(c, w, 0, "number of elements");
-        for (long long i = 0; i < n; ++i) {
-          expect_line("element");
-          long long type, ntags;
-          if (w.size() < 3 || !io_detail::parse_int(w[1], type) || !io_detail::parse_int(w[2], ntags) || ntags < 0 ||
-              w.size() < size_t(3 + ntags))
-            c.fail("expected `tag type ntags tags... nodes...`");
-          add_element(type, w.data() + 3 + ntags, w.size() - size_t(3 + ntags));
-        }
-      } else {
-        expect_line("$Elements header");
-        long long blocks = count_field(c, w, 0, "number of element blocks");
-        for (long long b = 0; b < blocks; ++b) {
-          expect_line("element block header");
-          long long type, count;
-          if (w.size() < 4 || !io_detail::parse_int(w[2], type) || !io_detail::parse_int(w[3], count) || count < 0)
-            c.fail("expected `entity-dim entity-tag element-type count`");
-          for (long long i = 0; i < count; ++i) {
-            expect_line("element");
-            add_element(type, w.data() + 1, w.size() - 1);
-          }
-        }
-      }
-      expect_line("$EndElements");
-      if (l != "$EndElements") c.fail("expected $EndElements, got `" + std::string(l) + "` (wrong counts?)");
-      have_elements = true;
-    } else {
-      const std::string end = "$End" + name;
-      bool closed = false;
-      while (c.next_line(l))
-        if (l == end) {
-          closed = true;
-          break;
-        }
-      if (!closed) c.fail("truncated: no " + end);
-    }
-  }
-  if (!have_nodes) throw IOError(file + ": no $Nodes section");
-  if (!have_elements) throw IOError(file + ": no $Elements section");
-  CellsRead r;
-  r.V = to_matrix(xyz);
-  r.cells.resize(raw.size());
-  for (size_t i = 0; i < raw.size(); ++i) {
-    auto it = node_index.find(raw[i]);
-    if (it == node_index.end())
-      throw IOError(file + ": line " + std::to_string(raw_line[i / nodes]) + ": element node tag " +
-                    std::to_string(raw[i]) + " is not a node (" + vertex_count(xyz.size() / 3) + ")");
-    r.cells[i] = it->second;
-  }
-  for (auto& [type, n] : ignored)
-    r.warnings.push_back(file + ": ignored " + plural(n, "element") + " of Gmsh type " + std::to_string(type) +
-                         " (only type " + std::to_string(gmsh_type) + " is read)");
-  return r;
+  return GmshReader(data, file, gmsh_type, nodes).read();
 }
 
 void write_cell_mesh(const std::filesystem::path& path, const RowMatrixX3d& V, CellBlock cells, const CellKind& kind,

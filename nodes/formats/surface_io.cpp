@@ -317,13 +317,35 @@ class PlyValues {
   BinaryCursor* bin_;
 };
 
-RawSurface parse_ply(std::string_view data, const std::string& file) {
-  TextCursor h(data, file);
+struct PlyHeader {
+  std::string format;
+  std::vector<PlyElement> elements;
+  size_t body = 0;    ///< offset of the first byte after `end_header`
+  int body_line = 1;  ///< its line
+};
+
+PlyProperty parse_ply_property(TextCursor& h, const std::vector<std::string_view>& w) {
+  PlyProperty p;
+  if (w.size() >= 5 && w[1] == "list") {
+    p.count_type = std::string(w[2]);
+    p.type = std::string(w[3]);
+    p.name = std::string(w[4]);
+    if (!ply_type_known(p.count_type)) h.fail("unknown PLY type `" + p.count_type + "`");
+  } else if (w.size() >= 3) {
+    p.type = std::string(w[1]);
+    p.name = std::string(w[2]);
+  } else {
+    h.fail("expected `property TYPE NAME` or `property list COUNT_TYPE TYPE NAME`");
+  }
+  if (!ply_type_known(p.type)) h.fail("unknown PLY type `" + p.type + "`");
+  return p;
+}
+
+PlyHeader parse_ply_header(TextCursor& h, const std::string& file) {
   std::string_view l;
   std::vector<std::string_view> w;
   if (!h.line(l) || l != "ply") throw IOError(file + ": not a PLY file (the first line must be `ply`)");
-  std::string format;
-  std::vector<PlyElement> elements;
+  PlyHeader hd;
   bool header_done = false;
   while (h.line(l)) {
     io_detail::split_blanks(l, w);
@@ -335,51 +357,64 @@ RawSurface parse_ply(std::string_view data, const std::string& file) {
     if (w[0] == "comment" || w[0] == "obj_info") continue;
     if (w[0] == "format") {
       if (w.size() < 2) h.fail("format needs a name");
-      format = std::string(w[1]);
-      if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
-        h.fail("unknown PLY format `" + format + "`");
+      hd.format = std::string(w[1]);
+      if (hd.format != "ascii" && hd.format != "binary_little_endian" && hd.format != "binary_big_endian")
+        h.fail("unknown PLY format `" + hd.format + "`");
     } else if (w[0] == "element") {
       long long n;
       if (w.size() < 3 || !io_detail::parse_int(w[2], n) || n < 0) h.fail("expected `element NAME COUNT`");
-      elements.push_back({std::string(w[1]), n, {}});
+      hd.elements.push_back({std::string(w[1]), n, {}});
     } else if (w[0] == "property") {
-      if (elements.empty()) h.fail("property before any element");
-      PlyProperty p;
-      if (w.size() >= 5 && w[1] == "list") {
-        p.count_type = std::string(w[2]);
-        p.type = std::string(w[3]);
-        p.name = std::string(w[4]);
-        if (!ply_type_known(p.count_type)) h.fail("unknown PLY type `" + p.count_type + "`");
-      } else if (w.size() >= 3) {
-        p.type = std::string(w[1]);
-        p.name = std::string(w[2]);
-      } else {
-        h.fail("expected `property TYPE NAME` or `property list COUNT_TYPE TYPE NAME`");
-      }
-      if (!ply_type_known(p.type)) h.fail("unknown PLY type `" + p.type + "`");
-      elements.back().props.push_back(p);
+      if (hd.elements.empty()) h.fail("property before any element");
+      hd.elements.back().props.push_back(parse_ply_property(h, w));
     } else {
       h.fail("unexpected `" + std::string(w[0]) + "` in the PLY header");
     }
   }
   if (!header_done) throw IOError(file + ": truncated: no `end_header`");
-  if (format.empty()) throw IOError(file + ": no `format` line in the PLY header");
+  if (hd.format.empty()) throw IOError(file + ": no `format` line in the PLY header");
+  hd.body = h.pos();
+  hd.body_line = h.current_line();
+  return hd;
+}
 
-  const bool ascii = format == "ascii";
-  TextCursor text(data, file);
-  text.seek(h.pos(), h.current_line());
-  BinaryCursor bin(data, h.pos(), format == "binary_big_endian", file);
-  PlyValues values(ascii ? &text : nullptr, ascii ? nullptr : &bin);
+/// The body of a PLY file after its header: the vertex element's x, y, z and the face element's index
+/// list into a RawSurface; every other property and element read by its type and dropped.
+class PlyBodyReader {
+ public:
+  PlyBodyReader(std::string_view data, const std::string& file, const PlyHeader& hd)
+      : file_(file),
+        ascii_(hd.format == "ascii"),
+        text_(data, file),
+        bin_(data, hd.body, hd.format == "binary_big_endian", file),
+        values_(ascii_ ? &text_ : nullptr, ascii_ ? nullptr : &bin_) {
+    text_.seek(hd.body, hd.body_line);
+  }
 
-  RawSurface s;
-  bool have_vertex = false, have_face = false;
-  long long nv = 0;
-  std::vector<int> idx;
-  for (const PlyElement& e : elements) {
+  RawSurface read(const std::vector<PlyElement>& elements) {
+    for (const PlyElement& e : elements) read_element(e);
+    if (!have_vertex_) throw IOError(file_ + ": no PLY vertex element");
+    if (!have_face_) throw IOError(file_ + ": no PLY face element");
+    if (ascii_) {
+      std::string_view extra;
+      if (text_.next(extra)) text_.fail("more data after the elements the header announces (wrong counts?)");
+    }
+    for (size_t f = 0; f < s_.F.size(); ++f)
+      if (s_.F[f] >= nv_) {
+        const std::string where = s_.line[f / 3] > 0 ? "line " + std::to_string(s_.line[f / 3]) + ": " : "";
+        throw IOError(file_ + ": " + where + "triangle " + std::to_string(f / 3) + ": vertex index " +
+                      std::to_string(s_.F[f]) + " out of range (" + vertex_count(size_t(nv_)) + ")");
+      }
+    if (!ascii_) s_.line.clear();
+    return std::move(s_);
+  }
+
+ private:
+  void read_element(const PlyElement& e) {
     // An element without properties takes no bytes, so its count cannot be checked against the file: a
     // forged one (`element x 1000000000000`, fuzzing found it) would spin here for hours.
     if (e.props.empty() && e.count > 0)
-      throw IOError(file + ": PLY element `" + e.name + "` has " + std::to_string(e.count) +
+      throw IOError(file_ + ": PLY element `" + e.name + "` has " + std::to_string(e.count) +
                     " entries but no properties");
     int xyz[3] = {-1, -1, -1};
     int list = -1;
@@ -388,10 +423,10 @@ RawSurface parse_ply(std::string_view data, const std::string& file) {
         for (int k = 0; k < 3; ++k)
           if (e.props[p].count_type.empty() && e.props[p].name == std::string(1, char('x' + k))) xyz[k] = int(p);
       if (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0)
-        throw IOError(file + ": PLY vertex element has no x, y, z properties");
-      have_vertex = true;
-      nv = e.count;
-      s.V.reserve(3 * h.reserve_hint(e.count, e.props.size()));
+        throw IOError(file_ + ": PLY vertex element has no x, y, z properties");
+      have_vertex_ = true;
+      nv_ = e.count;
+      s_.V.reserve(3 * text_.reserve_hint(e.count, e.props.size()));
     } else if (e.name == "face") {
       for (size_t p = 0; p < e.props.size() && list < 0; ++p)
         if (!e.props[p].count_type.empty() &&
@@ -399,63 +434,67 @@ RawSurface parse_ply(std::string_view data, const std::string& file) {
           list = int(p);
       for (size_t p = 0; p < e.props.size() && list < 0; ++p)
         if (!e.props[p].count_type.empty()) list = int(p);
-      if (list < 0) throw IOError(file + ": PLY face element has no vertex index list");
-      have_face = true;
+      if (list < 0) throw IOError(file_ + ": PLY face element has no vertex index list");
+      have_face_ = true;
     }
-    for (long long i = 0; i < e.count; ++i) {
-      const std::string what = e.name + " " + std::to_string(i);
-      int line = ascii ? -1 : 0;
-      for (size_t p = 0; p < e.props.size(); ++p) {
-        const PlyProperty& pr = e.props[p];
-        if (pr.count_type.empty()) {
-          double x = values.get(pr.type, what);
-          if (ascii && p == 0) line = text.line_no();
-          for (int k = 0; k < 3; ++k)
-            if (xyz[k] == int(p)) {
-              if (!std::isfinite(x))
-                throw IOError(file + ": vertex " + std::to_string(i) + " has a non-finite coordinate");
-              if (s.V.size() < size_t(3 * (i + 1))) s.V.resize(size_t(3 * (i + 1)));  // grows as read
-              s.V[size_t(3 * i + k)] = x;
-            }
-          continue;
-        }
-        double n = values.get(pr.count_type, what + " list count");
-        if (ascii && p == 0) line = text.line_no();
-        // (bounded before any int conversion: a forged count like 1e16 is not representable)
-        if (n < 0 || n != std::floor(n) || n > double(INT32_MAX))
-          throw IOError(file + ": " + what + ": bad list count");
-        if (int(p) == list) {
-          if (n < 3)
-            throw IOError(file + ": face " + std::to_string(i) + " has " + std::to_string(int(n)) +
-                          " vertices (at least 3 needed)");
-          idx.clear();
-          for (int k = 0; k < int(n); ++k) {
-            double v = values.get(pr.type, what);
-            if (v < 0 || v != std::floor(v) || v > double(INT32_MAX))
-              throw IOError(file + ": face " + std::to_string(i) + ": bad vertex index");
-            idx.push_back(int(v));
+    for (long long i = 0; i < e.count; ++i) read_entry(e, i, xyz, list);
+  }
+
+  /// Entry i of element e; `xyz` are the columns of the coordinates, `list` that of the face's indices.
+  void read_entry(const PlyElement& e, long long i, const int xyz[3], int list) {
+    const std::string what = e.name + " " + std::to_string(i);
+    int line = ascii_ ? -1 : 0;
+    for (size_t p = 0; p < e.props.size(); ++p) {
+      const PlyProperty& pr = e.props[p];
+      if (pr.count_type.empty()) {
+        double x = values_.get(pr.type, what);
+        if (ascii_ && p == 0) line = text_.line_no();
+        for (int k = 0; k < 3; ++k)
+          if (xyz[k] == int(p)) {
+            if (!std::isfinite(x))
+              throw IOError(file_ + ": vertex " + std::to_string(i) + " has a non-finite coordinate");
+            if (s_.V.size() < size_t(3 * (i + 1))) s_.V.resize(size_t(3 * (i + 1)));  // grows as read
+            s_.V[size_t(3 * i + k)] = x;
           }
-          add_polygon(s, idx, line);
-        } else {
-          for (int k = 0; k < int(n); ++k) values.get(pr.type, what);
+        continue;
+      }
+      double n = values_.get(pr.count_type, what + " list count");
+      if (ascii_ && p == 0) line = text_.line_no();
+      // (bounded before any int conversion: a forged count like 1e16 is not representable)
+      if (n < 0 || n != std::floor(n) || n > double(INT32_MAX)) throw IOError(file_ + ": " + what + ": bad list count");
+      if (int(p) == list) {
+        if (n < 3)
+          throw IOError(file_ + ": face " + std::to_string(i) + " has " + std::to_string(int(n)) +
+                        " vertices (at least 3 needed)");
+        idx_.clear();
+        for (int k = 0; k < int(n); ++k) {
+          double v = values_.get(pr.type, what);
+          if (v < 0 || v != std::floor(v) || v > double(INT32_MAX))
+            throw IOError(file_ + ": face " + std::to_string(i) + ": bad vertex index");
+          idx_.push_back(int(v));
         }
+        add_polygon(s_, idx_, line);
+      } else {
+        for (int k = 0; k < int(n); ++k) values_.get(pr.type, what);
       }
     }
   }
-  if (!have_vertex) throw IOError(file + ": no PLY vertex element");
-  if (!have_face) throw IOError(file + ": no PLY face element");
-  if (ascii) {
-    std::string_view extra;
-    if (text.next(extra)) text.fail("more data after the elements the header announces (wrong counts?)");
-  }
-  for (size_t f = 0; f < s.F.size(); ++f)
-    if (s.F[f] >= nv) {
-      const std::string where = s.line[f / 3] > 0 ? "line " + std::to_string(s.line[f / 3]) + ": " : "";
-      throw IOError(file + ": " + where + "triangle " + std::to_string(f / 3) + ": vertex index " +
-                    std::to_string(s.F[f]) + " out of range (" + vertex_count(size_t(nv)) + ")");
-    }
-  if (!ascii) s.line.clear();
-  return s;
+
+  const std::string& file_;
+  const bool ascii_;
+  TextCursor text_;
+  BinaryCursor bin_;
+  PlyValues values_;
+  RawSurface s_;
+  bool have_vertex_ = false, have_face_ = false;
+  long long nv_ = 0;
+  std::vector<int> idx_;
+};
+
+RawSurface parse_ply(std::string_view data, const std::string& file) {
+  TextCursor h(data, file);
+  const PlyHeader hd = parse_ply_header(h, file);
+  return PlyBodyReader(data, file, hd).read(hd.elements);
 }
 
 // ---------------------------------------------------------------------------------------------
