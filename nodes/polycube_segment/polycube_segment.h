@@ -3,56 +3,8 @@
 /// normals, group them into charts, clean up, split multi-orientation and highly non-planar charts,
 /// and check that the result is a valid PolyCube structure.
 ///
-/// Extensions beyond §5.1, for problems its two splitting rules leave on real models (measured on the
-/// 28 shared models, TetGen edge 0.03: 6 invalid without them, 0 with them). Both run only on an
-/// invalid structure and keep a change only when it lowers (problems, neighbour deficit):
-/// - island cuts (split_islands): a chart enclosed by another (the outer one a ring with two or more
-///   boundary loops, e.g. a +X patch inside a +Y region on casting) has one neighbour and no
-///   straightening can give it four; the ring is cut along the cheapest axis-aligned path from the
-///   island to the ring's other boundary, as a PolyCube edge between the two charts would run.
-/// - corner patches (repair_corners): a saddle vertex (+Z, -X, -Z, +X around it: opposite directions
-///   touching at one vertex, a 4-valent corner; conjoined_twins, encrusted_cube, bimba) is no PolyCube
-///   corner; a small patch around it relabelled to the third axis splits it into valence-3 corners.
-///   The same search also resolves the remaining same-axis neighbours on femur and carter.
-/// - ramps (split_ramps): a chart whose deformed vertices span more than `ramp_extent` hex edges along
-///   its own axis (2nd to 98th percentile) is cut across at its middle level, by the §5.1 wedge cut (a
-///   separating chart of width h, the cheapest axis-aligned path through the chart, half price when it
-///   joins two crossings of that level) from a point where one of its edges crosses the level. The
-///   rotation-driven deformation cannot make a helical strip (a screw thread, a twisted bar) planar:
-///   it stays a ramp whose labels all agree, its edges never double back, so the wedge rule does not
-///   see it, and enforcing one plane on it folds the map. Cut, it becomes a staircase of charts, each
-///   flat, as a PolyCube of a helix must be. Runs on valid structures too (a ramp is valid but flattens
-///   badly); a cut is applied only when every chart it makes has >= 4 neighbours and none of its own axis.
-/// - order cycles (split_order_cycles): the order of nearby same-axis charts in the deformed mesh
-///   (chart_order.h: the §5.2 Voronoi distance samples and the charts bridged by a chart of another axis)
-///   can contradict itself, p below q below r below p, where charts are far from planar (the twisted
-///   bar: 7 such pairs; femur: 1). No plane per chart keeps every order then, and the PolyCube map
-///   swaps the weakest. While there are such cycles, a chart on one is cut across its axis: first where
-///   the cycle asks (chart_order.h cycle_cuts: a chart whose part near the chart below it on the cycle
-///   sits higher than its part near the chart above it, cut between the two heights), then across its
-///   middle level (any chart spanning more than extremum_depth hex edges), by the ramp cut above, up to
-///   max_cut_candidates starts; a cut is kept only when valid and when it lowers the number of
-///   cycle-closing pairs or, keeping it, their summed evidence (on a helix a cut mostly moves the cycle
-///   to the next chart with a smaller contradiction). What is left is reported (order_cycles; -1 when
-///   off). Measured (configs/polycube.json, tet edge 0.02): the twist's map keeps no cycle instead of 7
-///   (9 cuts; 534 -> 90 inverted tets, distortion 1.093 -> 1.048), femur none instead of 1 (2 cuts);
-///   the other shared models have none. Femur's hex mesh rose (minimum 0.304 -> 0.365, average 0.924 ->
-///   0.928); the twist's fell (0.188 -> 0.005: padding hexes whose boundary quads fold across the bar's
-///   sharp helical edges), which the default configs' retry catches by a variant without these cuts.
-/// - narrow charts (min_chart_extent, narrow_chart_faces): a chart narrower than a hex edge along an axis
-///   of its plane is likely to collapse when the map rounds the charts around it onto one plane (for
-///   extent e hex edges, with probability about 1 - e), leaving its triangles and the volume under them
-///   squeezed flat; femur kept 18 charts with no area left in the PolyCube, all below 3 hex faces. On a
-///   valid structure such charts smaller than narrow_chart_faces hex faces are removed (remove_narrow_charts
-///   in the .cpp: one at a time, else all at once with the repairs, kept only when valid). Longer strips are
-///   left: they are the splits' separating charts or real thin features (fertility's two strips 0.9 hex edges
-///   wide, 9-13 hex faces: removing them lowered its minimum scaled Jacobian in both map variants).
-/// - small same-axis charts (with final_cleanup): a small chart beside a chart of its own axis is
-///   spurious; if the structure is still invalid, it is removed by flood fill before the two repairs
-///   above and the better result kept (carter at edge 0.04). The repairs can themselves leave small
-///   charts with < 4 neighbours (femur at tet edge 0.019: three, 0.02-0.13 % of the area, invalid with
-///   every fallback smoothing): if the structure is still invalid, they are removed once more and the
-///   result kept when its score is better.
+/// The extensions beyond §5.1 (island cuts, corner patches, ramps, order cycles, narrow and small
+/// charts), why each is there and what it measured: docs/polycube_segment.md.
 #pragma once
 
 #include "nodes/artefacts/meshes.h"
