@@ -2,6 +2,7 @@
 
 #include "graph/cache.h"
 #include "runtime/atomic_file.h"
+#include "runtime/stopwatch.h"
 
 #include <oneapi/tbb/flow_graph.h>
 #include <oneapi/tbb/global_control.h>
@@ -191,8 +192,6 @@ std::string Pipeline::dot() const {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 /// One run's state and the steps that run one node: its inputs, its cache key, a cache hit, the
 /// computation (with --save-all's files) and its record. Nodes run concurrently: node i writes only its

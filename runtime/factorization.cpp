@@ -1,6 +1,7 @@
 #include "runtime/factorization.h"
 
 #include "runtime/errors.h"
+#include "runtime/stopwatch.h"
 
 #include <suitesparse/cholmod.h>
 #include <tbb/blocked_range.h>
@@ -19,7 +20,6 @@ namespace polyhex {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 /// Runs the BLAS under CHOLMOD on one thread. A multi-threaded OpenBLAS splits the supernodal
 /// kernels (dsyrk/dgemm/dtrsm) by its own thread count, so the factor's last bits could depend on the

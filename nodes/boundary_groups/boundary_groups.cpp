@@ -5,6 +5,7 @@
 #include "nodes/algorithms/triangle_tree.h"
 #include "nodes/artefacts/boundary_groups.h"
 #include "runtime/errors.h"
+#include "runtime/stopwatch.h"
 
 #include <tbb/parallel_for.h>
 
@@ -121,7 +122,7 @@ HexMesh add_boundary_groups(const HexMesh& mesh, const PolyCubeMap* map, const S
   }
   if (const std::string problem = boundary_groups_problem(out); !problem.empty())
     throw InvalidInput(name + ": " + problem);  // e.g. a negative chart id in the segmentation
-  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  s.seconds = seconds_since(t0);
   return out;
 }
 

@@ -4,6 +4,7 @@
 #include "nodes/algorithms/hex_quality.h"
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
+#include "runtime/stopwatch.h"
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -539,7 +540,7 @@ HexMesh extract_hexes(const PolyCubeMap& map, const HexExtractParams& p, HexExtr
   HexExtractStats st;
   Extractor ex(map, p, st);
   HexMesh out = ex.run();
-  st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  st.seconds = seconds_since(t0);
   if (stats) *stats = st;
   return out;
 }

@@ -10,6 +10,7 @@
 #include "nodes/optimize/untangle_global.h"
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
+#include "runtime/stopwatch.h"
 
 #include <Eigen/SVD>
 #include <tbb/blocked_range.h>
@@ -35,7 +36,7 @@ using Clock = std::chrono::steady_clock;
 struct PhaseTimer {
   double& total;
   Clock::time_point t0 = Clock::now();
-  ~PhaseTimer() { total += std::chrono::duration<double>(Clock::now() - t0).count(); }
+  ~PhaseTimer() { total += seconds_since(t0); }
 };
 
 using optimize_detail::chi;
@@ -372,7 +373,7 @@ class Optimizer {
     return st_.time_budget_hit;
   }
 
-  double elapsed() const { return std::chrono::duration<double>(Clock::now() - t0_).count(); }
+  double elapsed() const { return seconds_since(t0_); }
 
   bool movable(int v) const {
     if (!snap_.corner.empty() && snap_.corner[size_t(v)] >= 0 && on_surface(v)) return false;  // at a crease corner
@@ -845,7 +846,7 @@ HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback,
     c.mesh = &m;
     summarise(m, c.st.sj_min_before, c.st.sj_avg_before, c.st.inverted_before);
     c.opt = std::make_unique<Optimizer>(m, surface, q, c.st);
-    c.seconds = std::chrono::duration<double>(Clock::now() - tc).count();
+    c.seconds = seconds_since(tc);
     return c;
   };
   auto improve = [&](Candidate& c) {
@@ -853,7 +854,7 @@ HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback,
     c.opt->improve();
     c.st.inverted_after = c.opt->inverted_now();
     c.st.sj_min_after = c.opt->min_now();
-    c.seconds += std::chrono::duration<double>(Clock::now() - tc).count();
+    c.seconds += seconds_since(tc);
   };
   OptimizeParams plain = p;
   plain.feature_angle = 0;
@@ -881,8 +882,8 @@ HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback,
   report(0.33, "shape improvement");
   HexMesh out = best->opt->finish(best->mesh->source);
   summarise(out, best->st.sj_min_after, best->st.sj_avg_after, best->st.inverted_after);
-  best->seconds += std::chrono::duration<double>(Clock::now() - tf).count();
-  best->st.seconds = std::chrono::duration<double>(Clock::now() - t0).count();  // the whole stage
+  best->seconds += seconds_since(tf);
+  best->st.seconds = seconds_since(t0);  // the whole stage
   if (stats) *stats = best->st;
   if (outcome) {
     *outcome = FallbackOutcome{};

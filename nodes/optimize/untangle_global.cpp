@@ -7,6 +7,7 @@
 #include "nodes/artefacts/hex_topology.h"
 #include "runtime/cancel.h"
 #include "runtime/lbfgs.h"
+#include "runtime/stopwatch.h"
 
 #include <tbb/parallel_for.h>
 
@@ -197,8 +198,7 @@ class GlobalUntangler {
 
  private:
   bool out_of_time() {
-    if (p_.seconds > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count() > p_.seconds)
-      st_.time_budget_hit = true;
+    if (p_.seconds > 0 && seconds_since(t0_) > p_.seconds) st_.time_budget_hit = true;
     return st_.time_budget_hit;
   }
 

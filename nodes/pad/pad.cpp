@@ -5,6 +5,7 @@
 #include "nodes/algorithms/triangle_tree.h"
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
+#include "runtime/stopwatch.h"
 
 #include <tbb/parallel_for.h>
 
@@ -393,7 +394,7 @@ HexMesh pad_boundary(const HexMesh& input, const SurfaceMesh* surface, const Pad
   st.inverted = long((corner.array() <= 0).count());
   st.hexes_added = long(Q.rows());
   st.vertices_added = nb;
-  st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  st.seconds = seconds_since(t0);
   if (stats) *stats = st;
   return out;
 }

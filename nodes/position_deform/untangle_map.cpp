@@ -4,6 +4,7 @@
 #include "nodes/algorithms/hex_corners.h"
 #include "nodes/artefacts/cell_rings.h"
 #include "runtime/lbfgs.h"
+#include "runtime/stopwatch.h"
 
 #include <tbb/parallel_for.h>
 
@@ -161,8 +162,7 @@ class MapUntangler {
   }
 
   bool out_of_time() {
-    if (p_.seconds > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count() > p_.seconds)
-      st_.time_budget_hit = true;
+    if (p_.seconds > 0 && seconds_since(t0_) > p_.seconds) st_.time_budget_hit = true;
     return st_.time_budget_hit;
   }
 
@@ -366,7 +366,7 @@ long untangle_polycube_map(const RowMatrixX3d& X, const RowMatrixX4i& T, RowMatr
   const auto t0 = std::chrono::steady_clock::now();
   MapUntangler u(X, T, U, fixed_axes, p, st);
   const long left = u.run();
-  st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  st.seconds = seconds_since(t0);
   return left;
 }
 

@@ -3,6 +3,7 @@
 #include "nodes/artefacts/polycube.h"
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
+#include "runtime/stopwatch.h"
 
 #include <Eigen/Geometry>
 #include <Eigen/SparseCore>
@@ -23,7 +24,6 @@ namespace polyhex {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 constexpr double kPi = 3.14159265358979323846;
 

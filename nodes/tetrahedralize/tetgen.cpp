@@ -5,6 +5,7 @@
 #include "nodes/algorithms/reference_length.h"
 #include "nodes/formats/surface_io.h"
 #include "runtime/errors.h"
+#include "runtime/stopwatch.h"
 
 #include <Eigen/Geometry>
 #include <tetgen.h>
@@ -365,7 +366,7 @@ TetMesh tetrahedralize(const SurfaceMesh& surface, const TetgenParams& p, Tetgen
   if (stats) {
     *stats = tet_stats(m, h);
     stats->estimated_tets = estimate.tets;
-    stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    stats->seconds = seconds_since(t0);
   }
   return m;
 }
