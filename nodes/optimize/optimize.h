@@ -2,64 +2,14 @@
 /// @brief Hex mesh optimization (paper §6): untangling, per-vertex max-min scaled Jacobian repositioning,
 /// then a global shape improvement; connectivity unchanged, boundary vertices kept on the input surface.
 ///
-/// The paper used Mesquite for the shape improvement; here every phase is a nonlinear Gauss-Seidel sweep
-/// over the vertices (graph-coloured, the vertices of one colour share no hex and move in parallel):
-///  (a) untangle, while a hex corner is inverted: minimise over the vertices near inverted hexes the
-///      regularised Winslow energy of the "foldover-free maps" line of work (Garanzha et al. 2021),
-///      Σ_corners |J|_F² / (3 χ(det J, ε)^{2/3}), χ(D, ε) = (D + sqrt(ε² + D²)) / 2, J the corner's three
-///      edge vectors over the local edge length, ε shrinking with the most negative corner determinant;
-///      finite for inverted corners, so the descent walks out of the fold; the sweeps stop when the
-///      count of inverted hexes stalls for 20 sweeps. If hexes are still inverted, the stage first goes on
-///      locally (the boundary release below, then the sweeps again); only if that leaves inverted hexes does
-///      it go back and try the global way: the vertices around the remaining inverted hexes move all at once
-///      by L-BFGS on the same energy (untangle_global.h: a hex folded against the surface needs several
-///      vertices to move together, which one-vertex moves cannot do), then the sweeps and the release; the
-///      way with fewer inverted hexes (then the higher minimum scaled Jacobian) goes on to (b) and (c). The
-///      global descent spreads motion over several rings and can end lower where local moves alone succeed,
-///      hence the order;
-///  (b) max-min: move each vertex whose incident hexes are below `target_sj` to maximise the minimum
-///      scaled Jacobian (Verdict, centre term included) of its incident hexes: gradient of a soft minimum,
-///      backtracking line search, plus the average of its edge neighbours as a candidate; when the global
-///      minimum stalls (or after `iterations` sweeps), sweeps over the vertices of the worst hexes only
-///      (below the minimum + 0.15), cheap, until the minimum stalls for 5 sweeps;
-///  (b') whole-hex moves: hexes below `target_sj`, worst first, one at a time: the 8 vertices move towards
-///      the cube that best fits the hex (least-squares rotation, scale and translation: Kabsch), by 1, 1/2
-///      or 1/4 of the way, boundary vertices projected back onto the surface; kept only if the minimum scaled
-///      Jacobian of all hexes around the moved vertices rises and none inverts (two boundary vertices pressed
-///      together need to move at once, which (b) cannot do); then (b) again, for `element_iterations` rounds;
-///  (b'') region smoothing: the interior vertices of the hexes within 0.05 of the minimum and `global_rings`
-///      rings around them move together by L-BFGS on the Winslow energy at ε -> 0 (a barrier against inversion;
-///      untangle_global.h smooth_region), then (b) again; kept only if the minimum rises, for `smooth_iterations`
-///      rounds and at most until half the time budget is spent, so that (c) always runs (a
-///      patch of poor hexes, where neither one vertex nor one hex can move alone); boundary vertices stay (the
-///      energy would slide them across the surface's creases: L-block volume ratio 0.984 -> 0.972);
-///  (c0) global average ascent: the interior vertices of the hexes below `average_below_sj`, grown by
-///      `average_rings`, move together by L-BFGS on the sum over their hexes of minus the soft minimum of
-///      the hex's 9 scaled Jacobians, with a steep penalty below the region's lowest soft value and a small
-///      Winslow barrier against inversion (untangle_global.h raise_average). The Gauss-Seidel sweeps of (c)
-///      converge slowly where a whole region must drift (hand: 34 sweeps stop at average 0.926, 200 reach
-///      0.932). At most `average_iterations`, and at most `average_work` / the hexes of the region (the cost
-///      stays bounded on big meshes); it stops earlier when 25 iterations raise the region's scaled
-///      Jacobians by less than `average_tolerance` per hex. If the minimum fell, (b) runs again, then the vertices of
-///      the hexes still below the old minimum and one ring around them go back to their positions, the set growing
-///      until none is below (up to 10 rounds); kept only if no hex inverts, the minimum does not fall and
-///      the average rises;
-///  (c) shape improvement, alternating sweeps: every vertex descends the same Winslow energy (ε -> 0) —
-///      coordinate descent of one global energy — or ascends the sum of its hexes' scaled Jacobians (the
-///      average the report measures), until a pair of sweeps raises the average by less than
-///      `shape_tolerance`.
-/// Creases (beyond the paper; features.h): closest-point projection does not know the surface's sharp
-/// creases, and a boundary quad lying across one ends with two corners pressed together on the crease line
-/// (carter: two pad hexes inverted). When the first result is poor (inverted hexes, or a minimum below
-/// `fallback_below_sj`), the same mesh is optimized again with the boundary vertices nearest each crease
-/// sharper than `feature_angle` on it (they move along the crease only, and those at crease corners stay),
-/// and the better result is kept (better_result). Only as a second candidate: on organic models the
-/// "creases" of a faceted scan are noise, and following them lowered bunny's minimum 0.50 -> 0.27 and
-/// inverted a hex of dragon.
-/// A move is accepted only if it does not lower the minimum scaled Jacobian of the vertex's hexes and
-/// inverts none of them (in (c) nor their sum; in (a): it lowers the energy and inverts no further corner). Boundary
-/// vertices (on boundary quads) move along the tangent plane of the surface and are projected back onto it (closest
-/// point, AABB tree) after every move.
+/// The paper used Mesquite; here every phase is a nonlinear Gauss-Seidel sweep over graph-coloured vertices or
+/// an L-BFGS descent over a region: (a) untangling (regularised Winslow energy, locally then globally), (b)
+/// max-min scaled Jacobian repositioning, (b') whole-hex moves towards the best-fit cube, (b'') region
+/// smoothing, (c0) a global ascent of the average, (c) shape improvement. A move is accepted only if it does
+/// not lower the minimum scaled Jacobian of the vertex's hexes and inverts none of them; boundary vertices move
+/// in the surface's tangent plane and are projected back onto it. When the first result is poor, a second
+/// candidate keeps the boundary vertices on the surface's creases (features.h). Each phase, its stopping rule
+/// and why: docs/optimize.md.
 #pragma once
 
 #include "nodes/artefacts/meshes.h"

@@ -14,67 +14,10 @@
 ///     v_i - v_j ≈ ½(∇_i + ∇_j)(ṽ_i - ṽ_j).
 /// The next iteration starts from the deformed positions.
 ///
-/// Linear systems (designed so both matrices are constant for a whole run: 1 analysis + 1 numeric
-/// factorization each, then only right-hand sides change):
-///  - quaternion field: minimise Σ_edges |q_i - q_j|² + w² Σ_{boundary b} |q_b - a_b|², i.e.
-///    (L + w² S) q = w² S a per component, L the uniform-weight graph Laplacian of the tet edges
-///    (degree on the diagonal, -1 per edge), S the 0/1 diagonal of the boundary vertices. This
-///    Dirichlet form (not the bi-Laplacian L^T L of stacked Laplace rows) has a 1-ring stencil, and
-///    (L + w² S)^{-1} w² S is entrywise non-negative with unit row sums: every interior quaternion
-///    is a convex combination of anchor quaternions, exactly the positive, convex weights §4.1 relies
-///    on, so q_w > 0 everywhere and no interpolated quaternion is degenerate.
-///  - Feature vertices change from iteration to iteration, but S does not: every boundary vertex
-///    keeps its anchor row, and a feature vertex's anchor target (right-hand side only) is the
-///    normalised mean of the targets of its non-feature boundary neighbours (propagated ring by ring
-///    along the surface; identity if a surface component has no non-feature vertex). Its own,
-///    unreliable normal (an average across a crease) so never drives the field, which is what
-///    "excluded from the constraints" asks for, and the matrix stays the same.
-///  - Eq. 1 multiplied by the degree N_i is L v = Σ_j ½(∇_i+∇_j)(ṽ_i-ṽ_j): the same graph Laplacian;
-///    the pinned vertex's row and column are replaced by the identity (its value moved to the
-///    right-hand side). L depends only on connectivity, so it is factored once.
-///
-/// Surface flattening (beyond the paper; `flatten` = β, default 1, 0 gives the paper's Eq. 1): in
-/// the right-hand side of Eq. 1, the target vector e = ½(∇_i+∇_j)(ṽ_i-ṽ_j) of a surface edge whose
-/// two end vertices are non-features with the same closest signed axis a loses the share β w of its
-/// component along a: e ← e - β w (e·a) a. The edge (j, i) gets -e, so the system stays the
-/// least-squares form of Eq. 1 and its matrix does not change (still factored once per run). Why:
-/// the rotation field is the solution of a Laplace problem, smooth at the scale of a few tets, so
-/// the paper's Eq. 1 rotates a bump of that size as a whole instead of flattening it; the per-edge
-/// projection removes the bump's height where the labels already agree, and the volume follows in
-/// the same solve. The axis comes from the vertex normal, exactly the axis its rotation targets.
-/// w fades with the larger deviation of the two end normals from a: 1 up to `flatten_full_angle`
-/// (30°), 0 from `flatten_max_angle` (50°), linear between. Where a normal lies near the bisector of
-/// two axes its label is a coin toss, and flattening both sides towards their axes folds a smooth
-/// curved transition into a crease: extra charts. Unweighted (w = 1 everywhere), the built-in
-/// fandisk_like shape (throughput_200k) got 18 charts instead of 13 and its optimizer 1.6x the time
-/// (min scaled Jacobian 0.605 against 0.698); with the fade, 13 charts, 0.690.
-///
-/// Measured (tets at edge length 0.02, 5 iterations; alignment after iteration 5 / inverted tets),
-/// β = 0 (paper) -> default:
-///   bunny        0.585 /  505  ->  0.787 /  467
-///   fandisk      0.933 /   48  ->  0.972 /   35
-///   rockerarm    0.775 /  943  ->  0.880 /  718
-///   fertility    0.603 / 2126  ->  0.780 / 1802
-///   bumpy_torus  0.530 / 1218  ->  0.725 / 1016
-///   casting      0.883 /  402  ->  0.935 /  256
-/// Unweighted β = 1 gave about the same alignment (bumpy_torus 0.741) with more charts on smooth CAD
-/// surfaces; β = 0.5 lies between; rescaling the projected edge to its old length changed alignment by
-/// < 0.005. The flattened bumps' volume goes: a few % more volume loss.
-///
-/// Variants of the paper's formulation measured before (β = 0) and rejected: each trades alignment
-/// for several times more inverted tets, or does not raise alignment at all:
-///  - anchor weight per vertex w² N_v (the balance of the paper's normalised Laplace row q_i - mean_j q_j
-///    against a unit anchor row): bunny 0.681 / 3085, fertility 0.667 / 6639, bumpy_torus 0.649 / 11472;
-///    alignment stops rising after iteration 4 on rockerarm, fertility, casting. Downstream
-///    anchor_weight 2 made the final hexes worse (bunny sj_min -0.090 against -0.006 at 1, at the time).
-///  - target axis chosen from normals smoothed over 3 or 10 surface rings: within ±0.005 of the raw
-///    choice; rotating the smoothed normal is worse (bunny 0.557).
-///  - features off (feature_angle 180): within 0.001.
-///  - Eq. 1 on the input edges with accumulated rotations ∇_k ... ∇_1: lower alignment (bunny 0.561),
-///    more inverted tets and volume loss; "each iteration starts from the previous deformed mesh" is kept.
-/// The paper's formulation alone left the noisy organic models (bunny, fertility, bumpy_torus) at
-/// 0.53-0.60: their surface detail is a few tets wide, below what a fold-free smooth rotation field
-/// flattens; the flattening term acts exactly at that scale.
+/// Beyond the paper, the surface flattening (`flatten` = β; 0 gives the paper's Eq. 1) removes, in Eq. 1's
+/// right-hand side, part of each surface edge's component along the axis its two end normals share. Both
+/// matrices are constant for a whole run (factored once). The linear systems, the flattening and the
+/// measurements behind them: docs/rotation_deform.md.
 #pragma once
 
 #include "nodes/artefacts/meshes.h"
