@@ -1,5 +1,6 @@
-// Node bindings of the mesh readers and writers (read_surface, read_tetmesh, write_hex,
-// write_tetmesh) and the --save-all savers of SurfaceMesh, TetMesh and HexMesh.
+/// @file io_node.cpp
+/// @brief Bindings of the mesh readers and writers (`read_surface`, `read_tetmesh`, `write_hex`,
+/// `write_tetmesh`) and the --save-all savers of SurfaceMesh, TetMesh and HexMesh.
 #include "graph/node.h"
 #include "nodes/formats/hexmesh_io.h"
 #include "nodes/formats/surface_io.h"

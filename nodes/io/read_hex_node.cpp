@@ -1,4 +1,5 @@
-// Node binding of `read_hex`: reads a hex mesh file (to rerun the late stages, e.g. optimize, on a saved mesh).
+/// @file read_hex_node.cpp
+/// @brief Binding of `read_hex`: reads a hex mesh file (to rerun the late stages, e.g. optimize, on a saved mesh).
 #include "graph/node.h"
 #include "nodes/formats/hexmesh_io.h"
 

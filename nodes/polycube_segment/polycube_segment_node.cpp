@@ -1,4 +1,5 @@
-// Binding of polycube_segment (paper §5.1): deformed TetMesh -> PolyCubeSegmentation.
+/// @file polycube_segment_node.cpp
+/// @brief Binding of `polycube_segment/default` (paper §5.1): deformed TetMesh -> PolyCubeSegmentation.
 #include "nodes/polycube_segment/polycube_segment.h"
 
 #include "graph/node.h"
