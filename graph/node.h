@@ -32,12 +32,14 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <initializer_list>
 #include <iosfwd>
 #include <map>
 #include <memory>
 #include <optional>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace polyhex {
@@ -153,6 +155,31 @@ struct ParamInfo {
   std::vector<std::string> choices;  ///< allowed strings, empty = any
 };
 
+/// The JSON names of an enum's values, declared once: a param's choices (ParamSet::add_enum) and any
+/// report of the value (a node's metrics) read the same list.
+template <class E>
+class EnumNames {
+ public:
+  EnumNames(std::initializer_list<std::pair<E, std::string>> entries) : entries_(entries) {}
+  /// The name of e, "" if e is not named.
+  const std::string& name(E e) const {
+    static const std::string none;
+    for (const auto& [value, n] : entries_)
+      if (value == e) return n;
+    return none;
+  }
+  /// The value named `n`, nullptr if none is.
+  const E* value(const std::string& n) const {
+    for (const auto& entry : entries_)
+      if (entry.second == n) return &entry.first;
+    return nullptr;
+  }
+  const std::vector<std::pair<E, std::string>>& entries() const { return entries_; }
+
+ private:
+  std::vector<std::pair<E, std::string>> entries_;
+};
+
 /// Declares the fields of a params struct P by name: the same names are the JSON keys, the
 /// `--set id.name=value` and sweep paths, and part of the cache key.
 template <class P>
@@ -190,27 +217,19 @@ class ParamSet {
   /// the check lists the names, and the params struct holds the value.
   /// \pre the struct's default is one of the values named
   template <class E>
-  ParamSet& add_enum(const std::string& name, E P::*member, std::vector<std::pair<E, std::string>> names,
-                     const std::string& doc) {
+  ParamSet& add_enum(const std::string& name, E P::*member, EnumNames<E> names, const std::string& doc) {
     static_assert(std::is_enum_v<E>, "add_enum takes an enum member");
-    auto name_of = [names](E e) {
-      for (const auto& [value, n] : names)
-        if (value == e) return n;
-      return std::string();
-    };
     ParamInfo info;
     info.name = name;
     info.doc = doc;
     info.kind = "string";
-    for (const auto& entry : names) info.choices.push_back(entry.second);
-    info.default_value = name_of(P{}.*member);
+    for (const auto& entry : names.entries()) info.choices.push_back(entry.second);
+    info.default_value = names.name(P{}.*member);
     fields_.push_back(Field{info,
                             [member, names](P& p, const json& v) {
-                              const std::string s = v.get<std::string>();
-                              for (const auto& [value, n] : names)
-                                if (n == s) p.*member = value;
+                              if (const E* e = names.value(v.get<std::string>())) p.*member = *e;
                             },
-                            [member, name_of](const P& p) { return json(name_of(p.*member)); }});
+                            [member, names](const P& p) { return json(names.name(p.*member)); }});
     return *this;
   }
 

@@ -14,6 +14,7 @@
 
 #include "nodes/artefacts/meshes.h"
 #include "nodes/artefacts/polycube_map.h"
+#include "runtime/stat_fields.h"
 
 namespace polyhex {
 
@@ -30,6 +31,14 @@ struct BoundaryGroupsStats {
   int surface_patches = 0;  ///< patches of the surface at feature_angle
   long facing_away = 0;     ///< boundary faces whose nearest chart or patch triangle faces the other way (thin walls)
   double seconds = 0;
+
+  /// Report names (runtime/stat_fields.h).
+  static constexpr auto fields() {
+    using S = BoundaryGroupsStats;
+    return std::make_tuple(stat("boundary_faces", &S::boundary_faces), stat("chart_groups", &S::chart_groups),
+                           stat("patch_groups", &S::patch_groups), stat("surface_patches", &S::surface_patches),
+                           stat("faces_facing_away", &S::facing_away), stat("seconds", &S::seconds));
+  }
 };
 
 /// The mesh with its boundary groups, in this order: `boundary` (family "boundary", every boundary face),

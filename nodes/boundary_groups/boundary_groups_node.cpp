@@ -4,6 +4,7 @@
 #include "nodes/boundary_groups/boundary_groups.h"
 
 #include "graph/node.h"
+#include "graph/stat_metrics.h"
 
 namespace polyhex {
 namespace {
@@ -32,12 +33,7 @@ const bool registered = register_node(
           BoundaryGroupsStats s;
           HexMesh out = add_boundary_groups(*in.get<HexMesh>(0), map.get(), surface.get(), p, &s);
           ctx.metrics["groups"] = out.groups.size();
-          ctx.metrics["boundary_faces"] = s.boundary_faces;
-          ctx.metrics["chart_groups"] = s.chart_groups;
-          ctx.metrics["patch_groups"] = s.patch_groups;
-          ctx.metrics["surface_patches"] = s.surface_patches;
-          ctx.metrics["faces_facing_away"] = s.facing_away;
-          ctx.metrics["seconds"] = s.seconds;
+          put_stats(s, ctx.metrics);
           if (s.facing_away > 0)
             ctx.warn(std::to_string(s.facing_away) +
                      " boundary faces took the chart or patch of a triangle facing the other way (a wall thinner than "

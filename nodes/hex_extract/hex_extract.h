@@ -33,6 +33,7 @@
 
 #include "nodes/artefacts/meshes.h"
 #include "nodes/artefacts/polycube_map.h"
+#include "runtime/stat_fields.h"
 
 namespace polyhex {
 
@@ -64,6 +65,19 @@ struct HexExtractStats {
   long duplicate_hexes = 0;  ///< hexes formed twice from overlapping centroids (one kept)
   long inverted = 0;         ///< hexes with a corner scaled Jacobian <= 0 (before padding / optimization)
   double seconds = 0;
+
+  /// Report names (runtime/stat_fields.h).
+  static constexpr auto fields() {
+    using S = HexExtractStats;
+    return std::make_tuple(
+        stat("hexes", &S::hexes), stat("vertices", &S::vertices), stat("corner_vertices", &S::corner_vertices),
+        stat("edge_vertices", &S::edge_vertices), stat("facet_vertices", &S::facet_vertices),
+        stat("volume_vertices", &S::volume_vertices), stat("dropped_conflict", &S::dropped_conflict),
+        stat("dropped_duplicate", &S::dropped_duplicate), stat("exploded_tets", &S::exploded_tets),
+        stat("unused_vertices", &S::unused_vertices), stat("centroids", &S::centroids),
+        stat("unlocated", &S::unlocated), stat("hexes_skipped", &S::hexes_skipped),
+        stat("duplicate_hexes", &S::duplicate_hexes), stat("inverted", &S::inverted), stat("seconds", &S::seconds));
+  }
 };
 
 /// Extracts the all-hex mesh of a PolyCube map (§6).

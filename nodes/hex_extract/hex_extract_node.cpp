@@ -3,6 +3,7 @@
 #include "nodes/hex_extract/hex_extract.h"
 
 #include "graph/node.h"
+#include "graph/stat_metrics.h"
 
 namespace polyhex {
 namespace {
@@ -24,23 +25,7 @@ const bool registered = register_node(make_node<P>(
     [](const P& p, const Inputs& in, NodeContext& ctx) {
       HexExtractStats s;
       HexMesh out = extract_hexes(*in.get<PolyCubeMap>(0), p, &s);
-      auto& j = ctx.metrics;
-      j["hexes"] = s.hexes;
-      j["vertices"] = s.vertices;
-      j["corner_vertices"] = s.corner_vertices;
-      j["edge_vertices"] = s.edge_vertices;
-      j["facet_vertices"] = s.facet_vertices;
-      j["volume_vertices"] = s.volume_vertices;
-      j["dropped_conflict"] = s.dropped_conflict;
-      j["dropped_duplicate"] = s.dropped_duplicate;
-      j["exploded_tets"] = s.exploded_tets;
-      j["unused_vertices"] = s.unused_vertices;
-      j["centroids"] = s.centroids;
-      j["unlocated"] = s.unlocated;
-      j["hexes_skipped"] = s.hexes_skipped;
-      j["duplicate_hexes"] = s.duplicate_hexes;
-      j["inverted"] = s.inverted;
-      j["seconds"] = s.seconds;
+      put_stats(s, ctx.metrics);
       if (s.exploded_tets > 0)
         ctx.warn(std::to_string(s.exploded_tets) + " tets of the map span more than " +
                  std::to_string(long(kMaxLatticePointsPerTet)) +

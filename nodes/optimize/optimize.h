@@ -14,6 +14,7 @@
 
 #include "nodes/artefacts/meshes.h"
 #include "runtime/progress.h"
+#include "runtime/stat_fields.h"
 
 #include <array>
 
@@ -83,6 +84,30 @@ struct OptimizeStats {
   double seconds = 0;
   double untangle_seconds = 0, global_seconds = 0, maxmin_seconds = 0, element_seconds = 0, smooth_seconds = 0,
          shape_seconds = 0;  ///< per phase
+
+  /// Report names (runtime/stat_fields.h). The crease_* figures are reported from the crease candidate only
+  /// (optimize_node.cpp), where they mean something.
+  static constexpr auto fields() {
+    using S = OptimizeStats;
+    return std::make_tuple(
+        stat("sj_min_before", &S::sj_min_before), stat("sj_avg_before", &S::sj_avg_before),
+        stat("inverted_before", &S::inverted_before), stat("sj_min", &S::sj_min_after),
+        stat("sj_avg", &S::sj_avg_after), stat("inverted", &S::inverted_after), stat("global_outer", &S::global_outer),
+        stat("global_lbfgs_iterations", &S::global_lbfgs_iterations),
+        stat("inverted_after_global", &S::inverted_after_global),
+        stat("global_free_vertices", &S::global_free_vertices), stat("optimize_ways", &S::optimize_ways),
+        stat("global_kept", &S::global_kept), stat("untangle_sweeps", &S::untangle_sweeps),
+        stat("maxmin_sweeps", &S::maxmin_sweeps), stat("shape_sweeps", &S::shape_sweeps),
+        stat("average_kept", &S::average_kept), stat("average_gain", &S::average_gain),
+        stat("element_sweeps", &S::element_sweeps), stat("element_moves", &S::element_moves),
+        stat("smooth_rounds", &S::smooth_rounds), stat("smooth_kept", &S::smooth_kept),
+        stat("iterations", &S::iterations), stat("moves", &S::moves), stat("colours", &S::colours),
+        stat("boundary_distance_max", &S::boundary_distance_max), stat("released_vertices", &S::released_vertices),
+        stat("time_budget_hit", &S::time_budget_hit), stat("seconds", &S::seconds),
+        stat("phase_seconds.untangle", &S::untangle_seconds), stat("phase_seconds.global", &S::global_seconds),
+        stat("phase_seconds.maxmin", &S::maxmin_seconds), stat("phase_seconds.element", &S::element_seconds),
+        stat("phase_seconds.smooth", &S::smooth_seconds), stat("phase_seconds.shape", &S::shape_seconds));
+  }
 };
 
 /// Optimizes vertex positions of a hex mesh (connectivity unchanged).

@@ -3,6 +3,7 @@
 #include "nodes/optimize/optimize.h"
 
 #include "graph/node.h"
+#include "graph/stat_metrics.h"
 
 namespace polyhex {
 namespace {
@@ -88,41 +89,11 @@ const bool registered = register_node(
             j["crease_lines_snapped"] = fb.creases_stats.crease_lines_snapped;
             j["crease_vertices"] = fb.creases_stats.crease_vertices;
           }
-          j["sj_min_before"] = s.sj_min_before;
-          j["sj_avg_before"] = s.sj_avg_before;
-          j["inverted_before"] = s.inverted_before;
-          j["sj_min"] = s.sj_min_after;
-          j["sj_avg"] = s.sj_avg_after;
-          j["inverted"] = s.inverted_after;
-          j["global_outer"] = s.global_outer;
-          j["global_lbfgs_iterations"] = s.global_lbfgs_iterations;
-          j["inverted_after_global"] = s.inverted_after_global;
-          j["global_free_vertices"] = s.global_free_vertices;
-          j["optimize_ways"] = s.optimize_ways;
-          j["global_kept"] = s.global_kept;
-          j["untangle_sweeps"] = s.untangle_sweeps;
-          j["maxmin_sweeps"] = s.maxmin_sweeps;
-          j["shape_sweeps"] = s.shape_sweeps;
-          j["average_kept"] = s.average_kept;
-          j["average_gain"] = s.average_gain;
-          j["element_sweeps"] = s.element_sweeps;
-          j["element_moves"] = s.element_moves;
-          j["smooth_rounds"] = s.smooth_rounds;
-          j["smooth_kept"] = s.smooth_kept;
-          j["iterations"] = s.iterations;
-          j["moves"] = s.moves;
-          j["colours"] = s.colours;
-          j["boundary_distance_max"] = s.boundary_distance_max;
-          j["released_vertices"] = s.released_vertices;
+          put_stats(s, j);
           if (s.released_vertices > 0)
             ctx.warn(std::to_string(s.released_vertices) +
                      " boundary vertices left the surface to untangle hexes (max distance " +
                      std::to_string(s.boundary_distance_max) + " of the bbox diagonal)");
-          j["time_budget_hit"] = s.time_budget_hit;
-          j["seconds"] = s.seconds;
-          j["phase_seconds"] = {{"untangle", s.untangle_seconds}, {"global", s.global_seconds},
-                                {"maxmin", s.maxmin_seconds},     {"element", s.element_seconds},
-                                {"smooth", s.smooth_seconds},     {"shape", s.shape_seconds}};
           if (s.inverted_after > 0)
             ctx.warn(std::to_string(s.inverted_after) + " hexes are still inverted after optimization (" +
                      std::to_string(s.inverted_before) + " before)");

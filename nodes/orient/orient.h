@@ -15,6 +15,7 @@
 
 #include "nodes/artefacts/frames.h"
 #include "nodes/artefacts/meshes.h"
+#include "runtime/stat_fields.h"
 
 namespace polyhex {
 
@@ -34,6 +35,13 @@ struct OrientStats {
   double input_energy = 0;  ///< E of the input frame
   double best_energy = 0;   ///< lowest E found
   int branches = 0;         ///< frames that run (the input frame included)
+
+  /// Report names (runtime/stat_fields.h).
+  static constexpr auto fields() {
+    using S = OrientStats;
+    return std::make_tuple(stat("starts", &S::starts), stat("bins", &S::bins), stat("input_energy", &S::input_energy),
+                           stat("best_energy", &S::best_energy), stat("branches", &S::branches));
+  }
 };
 
 /// Axis-alignment energy E(R) of a surface's triangle normals (area-weighted; see the file comment).

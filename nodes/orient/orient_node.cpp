@@ -5,6 +5,7 @@
 #include "nodes/orient/orient.h"
 
 #include "graph/node.h"
+#include "graph/stat_metrics.h"
 
 #include <Eigen/Geometry>
 
@@ -45,11 +46,7 @@ const bool registered_search = register_node(make_node<OrientParams>(
       OrientStats st;
       Frames f = orient_frames(*in.get<SurfaceMesh>(0), p, &st);
       ctx.metrics["candidates"] = frames_json(f);
-      ctx.metrics["starts"] = st.starts;
-      ctx.metrics["bins"] = st.bins;
-      ctx.metrics["input_energy"] = st.input_energy;
-      ctx.metrics["best_energy"] = st.best_energy;
-      ctx.metrics["branches"] = st.branches;
+      put_stats(st, ctx.metrics);
       return make_artefact(std::move(f));
     }));
 

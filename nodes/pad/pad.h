@@ -4,6 +4,7 @@
 #pragma once
 
 #include "nodes/artefacts/meshes.h"
+#include "runtime/stat_fields.h"
 
 #include <array>
 #include <vector>
@@ -34,6 +35,17 @@ struct PadStats {
   long nonmanifold_removed = 0;                          ///< hexes removed to make the boundary manifold
   long nonmanifold_left = 0;  ///< non-manifold boundary edges + vertices of the result (0 unless the repair gave up)
   double seconds = 0;
+
+  /// Report names (runtime/stat_fields.h).
+  static constexpr auto fields() {
+    using S = PadStats;
+    return std::make_tuple(
+        stat("hexes_added", &S::hexes_added), stat("vertices_added", &S::vertices_added), stat("limited", &S::limited),
+        stat("doublets", &S::doublets), stat("hexes_removed", &S::hexes_removed), stat("peeled", &S::peeled),
+        stat("nonmanifold_edges", &S::nonmanifold_edges), stat("nonmanifold_vertices", &S::nonmanifold_vertices),
+        stat("nonmanifold_removed", &S::nonmanifold_removed), stat("nonmanifold_left", &S::nonmanifold_left),
+        stat("inverted", &S::inverted), stat("seconds", &S::seconds));
+  }
 };
 
 /// The non-manifold places of a hex mesh's boundary (faces in one hex only).

@@ -3,6 +3,7 @@
 #include "nodes/pad/pad.h"
 
 #include "graph/node.h"
+#include "graph/stat_metrics.h"
 
 namespace polyhex {
 namespace {
@@ -30,19 +31,8 @@ const bool registered = register_node(
                    PadStats s;
                    auto surface = in.has(1) ? in.get<SurfaceMesh>(1) : nullptr;
                    HexMesh out = pad_boundary(*in.get<HexMesh>(0), surface.get(), p, &s);
-                   ctx.metrics["hexes_added"] = s.hexes_added;
-                   ctx.metrics["vertices_added"] = s.vertices_added;
-                   ctx.metrics["limited"] = s.limited;
-                   ctx.metrics["doublets"] = s.doublets;
-                   ctx.metrics["hexes_removed"] = s.hexes_removed;
-                   ctx.metrics["peeled"] = s.peeled;
-                   ctx.metrics["nonmanifold_edges"] = s.nonmanifold_edges;
-                   ctx.metrics["nonmanifold_vertices"] = s.nonmanifold_vertices;
-                   ctx.metrics["nonmanifold_removed"] = s.nonmanifold_removed;
-                   ctx.metrics["nonmanifold_left"] = s.nonmanifold_left;
-                   ctx.metrics["inverted"] = s.inverted;
+                   put_stats(s, ctx.metrics);
                    ctx.metrics["hexes"] = out.H.rows();
-                   ctx.metrics["seconds"] = s.seconds;
                    if (s.nonmanifold_left > 0)
                      ctx.warn(std::to_string(s.nonmanifold_left) +
                               " non-manifold boundary edges / vertices left before padding");

@@ -5,6 +5,7 @@
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
 #include "runtime/factorization.h"
+#include "runtime/stopwatch.h"
 
 #include <Eigen/Dense>
 #include <Eigen/IterativeLinearSolvers>
@@ -23,7 +24,6 @@ namespace polyhex {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 /// Mean value coordinates of point x w.r.t. the triangle (p1,p2,p3) of a closed star polyhedron around x
 /// (Ju, Schaefer, Warren 2005, as used by [FKR05] for the 3D Laplacian). Adds to w[0..2].
@@ -418,7 +418,7 @@ void solve_axis(int a, const AxisInputs& in, PolyCubeMap& out, PositionDeformSta
 
   auto t0 = Clock::now();
   const PoissonStep ps = poisson_step(in, order, dpairs, a);
-  st.seconds_poisson += since(t0);
+  st.seconds_poisson += seconds_since(t0);
 
   const std::vector<long> k = chart_levels(order, ps, in, st);
   for (int ch : axis_charts) out.chart_plane[ch] = int(k[order.chart_group[ch]]);
@@ -437,30 +437,16 @@ void solve_axis(int a, const AxisInputs& in, PolyCubeMap& out, PositionDeformSta
       final_mvc(ps, in, vgroup, a, u, st);
   }
   out.U.col(a) = u;
-  st.seconds_final += since(t0);
+  st.seconds_final += seconds_since(t0);
   // Planarity: exact by substitution; measured anyway.
   for (int v = 0; v < nV; ++v)
     if (vgroup[v] >= 0)
       st.planarity_error = std::max(st.planarity_error, std::abs(out.U(v, a) - k[vgroup[v]] * h) / in.diag);
 }
 
-/// The per-axis statistics merged into st, in axis order.
+/// The per-axis statistics merged into st, in axis order, by their declared rules.
 void merge_axes(const std::array<PositionDeformStats, 3>& axis_stats, PositionDeformStats& st) {
-  for (const PositionDeformStats& s : axis_stats) {
-    st.merged_same_axis_charts += s.merged_same_axis_charts;
-    st.distance_pairs += s.distance_pairs;
-    st.ordered_pairs += s.ordered_pairs;
-    st.flipped_chart_orders += s.flipped_chart_orders;
-    st.order_constraints_dropped += s.order_constraints_dropped;
-    st.flipped_after_rounding += s.flipped_after_rounding;
-    st.final_iterations += s.final_iterations;
-    st.final_ilu_axes += s.final_ilu_axes;
-    st.chart_coordinates_rounded_max_shift =
-        std::max(st.chart_coordinates_rounded_max_shift, s.chart_coordinates_rounded_max_shift);
-    st.planarity_error = std::max(st.planarity_error, s.planarity_error);
-    st.seconds_poisson += s.seconds_poisson;
-    st.seconds_final += s.seconds_final;
-  }
+  for (const PositionDeformStats& s : axis_stats) merge_stats(st, s);
 }
 
 /// Untangling (step 5, untangle_map.h): a vertex keeps the coordinates of the chart planes it lies on.

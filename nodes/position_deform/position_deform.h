@@ -95,6 +95,26 @@ struct PositionDeformStats {
   int final_iterations = 0;    ///< BiCGSTAB iterations of the mvc_laplace final solves (three axes)
   int final_ilu_axes = 0;      ///< axes whose final solve used the incomplete LU preconditioner
   double seconds_poisson = 0, seconds_final = 0;  ///< summed over the three axes (which run in parallel)
+
+  /// Report names, and how the three axes' figures merge (runtime/stat_fields.h).
+  static constexpr auto fields() {
+    using S = PositionDeformStats;
+    return std::make_tuple(
+        stat("charts", &S::charts), stat("distance_pairs", &S::distance_pairs, Combine::sum),
+        stat("ordered_pairs", &S::ordered_pairs, Combine::sum),
+        stat("flipped_chart_orders", &S::flipped_chart_orders, Combine::sum),
+        stat("flipped_after_rounding", &S::flipped_after_rounding, Combine::sum),
+        stat("order_constraints_dropped", &S::order_constraints_dropped, Combine::sum),
+        stat("merged_same_axis_charts", &S::merged_same_axis_charts, Combine::sum),
+        stat("chart_coordinates_rounded_max_shift", &S::chart_coordinates_rounded_max_shift, Combine::max),
+        stat("inverted_tets", &S::inverted_tets), stat("untangle", &S::untangle), stat("distortion", &S::distortion),
+        stat("distortion_p99", &S::distortion_p99), stat("distortion_max", &S::distortion_max),
+        stat("planarity_error", &S::planarity_error, Combine::max),
+        stat("final_iterations", &S::final_iterations, Combine::sum),
+        stat("final_ilu_axes", &S::final_ilu_axes, Combine::sum),
+        stat("seconds_poisson", &S::seconds_poisson, Combine::sum),
+        stat("seconds_final", &S::seconds_final, Combine::sum));
+  }
 };
 
 /// \param input      the input tet mesh (rest positions), positively oriented

@@ -1,7 +1,9 @@
-// Binding of the position-driven deformation (paper §5.2).
+/// @file position_deform_node.cpp
+/// @brief Binding of `position_deform/chart_planes` (paper §5.2): tets, deformed tets, segmentation -> PolyCubeMap.
 #include "nodes/position_deform/position_deform.h"
 
 #include "graph/node.h"
+#include "graph/stat_metrics.h"
 #include "nodes/formats/polycube_vtk.h"
 #include "nodes/formats/tetmesh_io.h"
 
@@ -46,32 +48,8 @@ const bool registered = register_node(
           PositionDeformStats s;
           PolyCubeMap m = position_deform(in.get<TetMesh>(0), *in.get<TetMesh>(1), in.get<PolyCubeSegmentation>(2), p,
                                           &s, ctx.progress_fn());
-          auto& j = ctx.metrics;
-          j["charts"] = s.charts;
-          j["distance_pairs"] = s.distance_pairs;
-          j["ordered_pairs"] = s.ordered_pairs;
-          j["flipped_chart_orders"] = s.flipped_chart_orders;
-          j["flipped_after_rounding"] = s.flipped_after_rounding;
-          j["order_constraints_dropped"] = s.order_constraints_dropped;
-          j["merged_same_axis_charts"] = s.merged_same_axis_charts;
-          j["chart_coordinates_rounded_max_shift"] = s.chart_coordinates_rounded_max_shift;
-          j["inverted_tets"] = s.inverted_tets;
-          j["inverted_tets_before_untangle"] = s.untangle.inverted_before;
-          j["untangle_free_vertices"] = s.untangle.free_vertices;
-          j["flat_tets"] = s.untangle.flat;
-          j["untangle_lbfgs_iterations"] = s.untangle.lbfgs_iterations;
-          j["untangle_polish_iterations"] = s.untangle.polish_iterations;
-          j["untangle_time_budget_hit"] = s.untangle.time_budget_hit;
-          j["seconds_untangle"] = s.untangle.seconds;
-          j["distortion"] = s.distortion;
-          j["distortion_p99"] = s.distortion_p99;
-          j["distortion_max"] = s.distortion_max;
-          j["planarity_error"] = s.planarity_error;
-          j["edge_length_abs"] = m.edge_length;
-          j["seconds_poisson"] = s.seconds_poisson;
-          j["seconds_final"] = s.seconds_final;
-          j["final_iterations"] = s.final_iterations;
-          j["final_ilu_axes"] = s.final_ilu_axes;
+          put_stats(s, ctx.metrics);
+          ctx.metrics["edge_length_abs"] = m.edge_length;
           if (s.flipped_after_rounding > 0)
             ctx.warn(std::to_string(s.flipped_after_rounding) +
                      " same-axis chart pairs could not keep their order after rounding");

@@ -20,6 +20,7 @@
 #pragma once
 
 #include "nodes/artefacts/meshes.h"
+#include "runtime/stat_fields.h"
 
 #include <cstdint>
 #include <vector>
@@ -47,6 +48,20 @@ struct MapUntangleStats {
   long polish_iterations = 0;  ///< L-BFGS iterations of the polish
   bool time_budget_hit = false;
   double seconds = 0;
+
+  /// Report names (runtime/stat_fields.h): as position_deform's metrics.
+  static constexpr auto fields() {
+    using S = MapUntangleStats;
+    return std::make_tuple(stat("inverted_tets_before_untangle", &S::inverted_before, Combine::sum),
+                           stat("inverted_tets_after_untangle", &S::inverted_after, Combine::sum),
+                           stat("flat_tets", &S::flat, Combine::sum),
+                           stat("untangle_free_vertices", &S::free_vertices, Combine::sum),
+                           stat("untangle_rounds", &S::rounds, Combine::sum),
+                           stat("untangle_lbfgs_iterations", &S::lbfgs_iterations, Combine::sum),
+                           stat("untangle_polish_iterations", &S::polish_iterations, Combine::sum),
+                           stat("untangle_time_budget_hit", &S::time_budget_hit, Combine::any),
+                           stat("seconds_untangle", &S::seconds, Combine::sum));
+  }
 };
 
 /// Moves the PolyCube positions U of the vertices near the inverted tets (see the file comment).

@@ -22,6 +22,7 @@
 
 #include "nodes/artefacts/meshes.h"
 #include "runtime/factorization.h"
+#include "runtime/stat_fields.h"
 
 #include <Eigen/Core>
 
@@ -58,6 +59,15 @@ struct RotationIterationStats {
   double min_quaternion_norm = 0;  ///< smallest |q| of the interpolated field before normalisation
   int feature_vertices = 0;        ///< boundary vertices classed as features this iteration
   double seconds = 0;              ///< wall time of the iteration
+
+  /// Report names (runtime/stat_fields.h): one array per field over the iterations.
+  static constexpr auto fields() {
+    using S = RotationIterationStats;
+    return std::make_tuple(stat("alignment", &S::alignment), stat("inverted_tets", &S::inverted_tets),
+                           stat("distortion", &S::distortion), stat("distortion_max", &S::distortion_max),
+                           stat("volume_ratio", &S::volume_ratio), stat("min_quaternion_norm", &S::min_quaternion_norm),
+                           stat("feature_vertices", &S::feature_vertices), stat("iteration_seconds", &S::seconds));
+  }
 };
 
 /// Output of rotation_deform.
@@ -70,6 +80,15 @@ struct RotationDeformResult {
   int boundary_vertices = 0;
   int boundary_faces = 0;
   int components = 0;  ///< connected components = pinned vertices
+
+  /// Report names (runtime/stat_fields.h); factor_stats reports itself (FactorizationStats::merge_into).
+  static constexpr auto fields() {
+    using S = RotationDeformResult;
+    return std::make_tuple(stat("iterations", &S::iterations), stat("alignment_input", &S::input_alignment),
+                           stat("assemble_seconds", &S::assemble_seconds),
+                           stat("boundary_vertices", &S::boundary_vertices), stat("boundary_faces", &S::boundary_faces),
+                           stat("components", &S::components));
+  }
 };
 
 /// Called after every iteration k (1-based) with the deformed mesh and its figures.

@@ -3,6 +3,8 @@
 #include "nodes/rotation_deform/rotation_deform.h"
 
 #include "graph/node.h"
+#include "graph/stat_metrics.h"
+#include "runtime/stopwatch.h"
 
 #include <chrono>
 
@@ -12,8 +14,7 @@ namespace {
 using P = RotationDeformParams;
 
 /// The JSON names of the solve modes (the param and the report's `solve_mode`).
-const std::vector<std::pair<SolveMode, std::string>> kSolveModes = {{SolveMode::MultiColumn, "multi_column"},
-                                                                    {SolveMode::Parallel, "parallel"}};
+const EnumNames<SolveMode> kSolveModes = {{SolveMode::MultiColumn, "multi_column"}, {SolveMode::Parallel, "parallel"}};
 
 const bool registered = register_node(
     make_node<P>(
@@ -70,37 +71,12 @@ const bool registered = register_node(
           auto& m = ctx.metrics;
           m["iterations"] = static_cast<int>(r.iterations.size());
           r.factor_stats.merge_into(m);  // factorizations, solves, factor_seconds, solve_seconds, analyses, ...
-          m["assemble_seconds"] = r.assemble_seconds;
-          for (const auto& [mode, name] : kSolveModes)
-            if (mode == p.solve_mode) m["solve_mode"] = name;
-          m["alignment_input"] = r.input_alignment;
-          json alignment = json::array(), inverted = json::array(), distortion = json::array(),
-               distortion_max = json::array(), volume = json::array(), qmin = json::array(), features = json::array(),
-               seconds = json::array();
-          for (const auto& s : r.iterations) {
-            alignment.push_back(s.alignment);
-            inverted.push_back(s.inverted_tets);
-            distortion.push_back(s.distortion);
-            distortion_max.push_back(s.distortion_max);
-            volume.push_back(s.volume_ratio);
-            qmin.push_back(s.min_quaternion_norm);
-            features.push_back(s.feature_vertices);
-            seconds.push_back(s.seconds);
-          }
-          m["alignment"] = alignment;
-          m["inverted_tets"] = inverted;
-          m["distortion"] = distortion;  // mean conformal distortion ||F|| ||F^-1|| / 3 of the tets vs the input
-          m["distortion_max"] = distortion_max;
-          m["volume_ratio"] = volume;
-          m["min_quaternion_norm"] = qmin;
-          m["feature_vertices"] = features;
-          m["iteration_seconds"] = seconds;
+          put_stats(r, m);
+          m["solve_mode"] = kSolveModes.name(p.solve_mode);
           m["tets"] = r.mesh.T.rows();
           m["vertices"] = r.mesh.V.rows();
-          m["boundary_vertices"] = r.boundary_vertices;
-          m["components"] = r.components;
           const double fs = r.factor_stats.factor_seconds + r.factor_stats.solve_seconds;
-          const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          const double total = seconds_since(t0);
           m["compute_seconds"] = total;
           m["factor_solve_fraction"] = total > 0 ? fs / total : 0.0;  // (factor + solve) / compute time
           return make_artefact(std::move(r.mesh));

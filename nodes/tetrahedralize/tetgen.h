@@ -4,6 +4,7 @@
 #pragma once
 
 #include "nodes/artefacts/meshes.h"
+#include "runtime/stat_fields.h"
 
 namespace polyhex {
 
@@ -42,6 +43,16 @@ struct TetgenStats {
   double seconds = 0;           ///< wall time of the whole call
   double estimated_tets = 0;    ///< estimate_tets(...).tets made before the run (the count TetGen gives is
                                 ///< 0.9-1.2 times this on a box, up to 3.5 times on surfaces finer than h)
+
+  /// Report names (runtime/stat_fields.h).
+  static constexpr auto fields() {
+    using S = TetgenStats;
+    return std::make_tuple(stat("tets", &S::tets), stat("estimated_tets", &S::estimated_tets),
+                           stat("vertices", &S::vertices), stat("target_edge", &S::target_edge),
+                           stat("edge_min_rel", &S::edge_min), stat("edge_max_rel", &S::edge_max),
+                           stat("edge_mean_rel", &S::edge_mean), stat("min_dihedral_deg", &S::min_dihedral_deg),
+                           stat("max_radius_edge", &S::max_radius_edge), stat("seconds", &S::seconds));
+  }
 };
 
 /// Tetrahedralizes the solid bounded by a closed surface with TetGen (flags `pq<ratio>/<angle>a<vol>zQ`,

@@ -1,6 +1,7 @@
 /// @file tetrahedralize_node.cpp
 /// @brief Binding of `tetrahedralize/tetgen`: SurfaceMesh -> TetMesh.
 #include "graph/node.h"
+#include "graph/stat_metrics.h"
 #include "nodes/tetrahedralize/tetgen.h"
 
 namespace polyhex {
@@ -27,16 +28,7 @@ const bool registered = register_node(
         [](const TetgenParams& p, const Inputs& in, NodeContext& ctx) {
           TetgenStats s;
           auto mesh = tetrahedralize(*in.get<SurfaceMesh>(0), p, &s);
-          ctx.metrics["tets"] = s.tets;
-          ctx.metrics["estimated_tets"] = s.estimated_tets;
-          ctx.metrics["vertices"] = s.vertices;
-          ctx.metrics["target_edge"] = s.target_edge;
-          ctx.metrics["edge_min_rel"] = s.edge_min;
-          ctx.metrics["edge_max_rel"] = s.edge_max;
-          ctx.metrics["edge_mean_rel"] = s.edge_mean;
-          ctx.metrics["min_dihedral_deg"] = s.min_dihedral_deg;
-          ctx.metrics["max_radius_edge"] = s.max_radius_edge;
-          ctx.metrics["seconds"] = s.seconds;
+          put_stats(s, ctx.metrics);
           return make_artefact(std::move(mesh));
         })
         .with_version("2"));  // 2: normalized coordinates for TetGen, max_tets

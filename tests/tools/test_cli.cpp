@@ -1,4 +1,13 @@
 // End-to-end runs of the polyhex binary: exit codes, messages naming file/node, report.json, check vs run.
+#include "graph/stat_metrics.h"
+#include "nodes/boundary_groups/boundary_groups.h"
+#include "nodes/hex_extract/hex_extract.h"
+#include "nodes/optimize/optimize.h"
+#include "nodes/orient/orient.h"
+#include "nodes/pad/pad.h"
+#include "nodes/position_deform/position_deform.h"
+#include "nodes/rotation_deform/rotation_deform.h"
+#include "nodes/tetrahedralize/tetgen.h"
 #include "tests/helpers/cli.h"
 #include "tests/helpers/report.h"
 
@@ -19,6 +28,24 @@ namespace {
 
 std::string config(const std::string& name) { return std::string(POLYHEX_SOURCE_DIR) + "/configs/" + name; }
 
+/// Every key (and member of an object) of `expected` is in `metrics`.
+void check_keys(const json& expected, const json& metrics, const std::string& where) {
+  for (const auto& [key, value] : expected.items()) {
+    INFO(where << ": " << key);
+    REQUIRE(metrics.contains(key));
+    if (value.is_object()) check_keys(value, metrics[key], where + "." + key);
+  }
+}
+
+/// Every figure the stats struct S declares (runtime/stat_fields.h) is in the node's metrics.
+template <class S>
+void check_declared(const json& node, const std::string& where) {
+  json expected;
+  polyhex::put_stats(S{}, expected);
+  REQUIRE(!expected.empty());
+  check_keys(expected, node["metrics"], where);
+}
+
 }  // namespace
 
 TEST_CASE("cli: the default (PolyCube) config meshes a built-in shape with no inverted hex", "[cli]") {
@@ -38,6 +65,20 @@ TEST_CASE("cli: the default (PolyCube) config meshes a built-in shape with no in
   CHECK(q["nonmanifold_boundary_edges"] == 0);
   CHECK(polyhex::test::kept_node(rep, "rotate")["metrics"]["factorizations"] == 2);
   CHECK(polyhex::test::kept_node(rep, "segment")["metrics"]["valid"] == true);
+  // Each stage reports every figure its stats declare, the map's untangling rounds among them.
+  using polyhex::test::kept_node;
+  check_declared<polyhex::TetgenStats>(rep["nodes"]["tets"], "tets");
+  check_declared<polyhex::OrientStats>(rep["nodes"]["orient"], "orient");
+  check_declared<polyhex::RotationDeformResult>(kept_node(rep, "rotate"), "rotate");
+  check_declared<polyhex::PositionDeformStats>(kept_node(rep, "polycube"), "polycube");
+  check_declared<polyhex::HexExtractStats>(kept_node(rep, "hex"), "hex");
+  check_declared<polyhex::PadStats>(kept_node(rep, "pad"), "pad");
+  check_declared<polyhex::OptimizeStats>(kept_node(rep, "optimize"), "optimize");
+  check_declared<polyhex::BoundaryGroupsStats>(kept_node(rep, "groups"), "groups");
+  const json map = kept_node(rep, "polycube")["metrics"];
+  if (map["inverted_tets_before_untangle"].get<long>() > 0) CHECK(map["untangle_rounds"].get<int>() >= 1);
+  CHECK(kept_node(rep, "rotate")["metrics"]["solve_mode"] == "multi_column");
+  CHECK(kept_node(rep, "rotate")["metrics"]["alignment"].size() == 5);  // one per iteration
 }
 
 TEST_CASE("cli: the baseline config runs on a built-in shape; check agrees with the report", "[cli]") {
