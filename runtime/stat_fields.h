@@ -3,12 +3,12 @@
 /// how two partial figures of a field combine, in a static `fields()`:
 ///
 /// @code
-///   struct PadStats {
-///     long hexes_added = 0;
-///     double seconds = 0;
+///   struct AxisStats {                  // figures of one axis, merged over the three
+///     long pairs = 0;
+///     double worst_shift = 0;
 ///     static constexpr auto fields() {
-///       return std::make_tuple(stat("hexes_added", &PadStats::hexes_added, Combine::sum),
-///                              stat("seconds", &PadStats::seconds, Combine::sum));
+///       return std::make_tuple(stat("pairs", &AxisStats::pairs, Combine::sum),
+///                              stat("worst_shift", &AxisStats::worst_shift, Combine::max));
 ///     }
 ///   };
 /// @endcode

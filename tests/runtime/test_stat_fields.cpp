@@ -55,7 +55,7 @@ TEST_CASE("merge_stats combines each field by its declared rule, nested stats to
   CHECK(a.phase_a == 3.5);
   CHECK(a.inner.count == 7);
   CHECK(a.inner.hit);
-  merge_stats(a, Outer{});  // merging nothing changes nothing but the min (best of 0.1 and 1)
+  merge_stats(a, Outer{});  // merging default figures changes nothing (the min keeps 0.1 against the default 1)
   CHECK(a.total == 7);
   CHECK(a.best == 0.1);
   CHECK(a.inner.hit);
