@@ -52,6 +52,7 @@ int run_check(const CheckOptions& o) {
   qp.samples = o.samples;
   HexQuality q = hex_quality(mesh, o.surface.empty() ? nullptr : &surface, qp);
   nlohmann::json j = to_json(q);
+  j.update(feature_json(q));  // beyond hexcheck's keys, as the quality node reports them
   if (o.json) {
     std::cout << j.dump() << "\n";
   } else {

@@ -125,6 +125,16 @@ def turned_section(args):
     j = next((k for k in range(i + 1, len(lines)) if lines[k].startswith("## ")), len(lines))
     return [""] + lines[i:j - 1]
 
+def feature_cell(q):
+    """The quality node's feature fidelity: lines, curve -> mesh / mesh -> curve max in 1e-3 (– before it)."""
+    if "feature_curves" not in q:
+        return "–"
+    if q["feature_curves"] == 0:
+        return "0"
+    return "{}, {:.1f} / {:.1f}".format(q["feature_curves"], q["feature_curve_to_mesh_max"] * 1e3,
+                                        q["feature_mesh_to_curve_max"] * 1e3)
+
+
 def fmt(x, spec=".3f"):
     return "–" if x is None else format(x, spec)
 
@@ -182,7 +192,7 @@ def main():
         print(f"{name}: exit {code}, {wall:.1f} s", file=sys.stderr)
         if rep is None or rep.get("status") != "ok":
             err = (rep or {}).get("error", " ".join(tail))
-            rows.append(f"| {name} | failed: {err.replace('|', '/')[:160]} |" + " |" * 12)
+            rows.append(f"| {name} | failed: {err.replace('|', '/')[:160]} |" + " |" * 13)
             continue
         n = rep["nodes"]
         q = n.get("quality", {}).get("metrics", {})
@@ -203,10 +213,11 @@ def main():
             (cond.get("repair") if cond.get("repair") != "none" else "") +
             (" + " if cond.get("repair") != "none" and cond.get("remeshed") else "") +
             (f"remeshed ({cond['input']['tessellation_ratio']:.1f}x finer)" if cond.get("remeshed") else ""))
-        rows.append("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |".format(
+        rows.append("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |".format(
             name, conditioning, m("tets", "tets"), m("segment", "charts"), q.get("hexes"), q.get("inverted"),
             fmt(q.get("sj_min")), fmt(q.get("sj_avg")), fmt(q.get("irregular_pct"), ".1f"),
             fmt(q.get("hausdorff_mean", 0) * 1e3, ".2f") + " / " + fmt(q.get("hausdorff_max", 0) * 1e3, ".1f"),
+            feature_cell(q),
             f"{rep['seconds']:.1f}", attempts,
             "–" if paper is None else f"{paper[2]:.3f} / {paper[1]:.3f}",
             "–" if best is None else f"{best[1]:.3f} / {best[2]:.3f} ({best[0]})"))
@@ -238,8 +249,11 @@ def main():
            " `retry` block (tools/cli_run.h) and the one kept; `time s` is the time of all attempts.", "",
            " `conditioning`: what the surface conditioning did (`as read`: passed through bit for bit; the repair; remeshed"
            " to the tet size when the input was more than 4 times finer).", "",
-           "| model | conditioning | tets | charts | hexes | inverted | SJ min | SJ avg | irregular % | Hausdorff mean / max (1e-3) | time s | attempts | paper min / avg | best min / avg |",
-           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"] + rows + [""] + summary(figures) + [
+           " `features`: the input's crease lines (count) and the max distances from them to the hex boundary's edges"
+           " and from the hex boundary's feature edges back to them, in 1e-3 of the diagonal (quality node,"
+           " nodes/algorithms/feature_fidelity.h; `–`: a run before it).", "",
+           "| model | conditioning | tets | charts | hexes | inverted | SJ min | SJ avg | irregular % | Hausdorff mean / max (1e-3) | features: lines, curve -> mesh / mesh -> curve max (1e-3) | time s | attempts | paper min / avg | best min / avg |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"] + rows + [""] + summary(figures) + [
            "", "## PolyCube stages", "",
            "| model | alignment after §4 | charts | corners | splits (multi-orientation / wedge / ramp / order cycle) | inverted tets of the map: final solve -> untangled (flat: 4 vertices on a plane or 3 on an edge) | map distortion (median) | chart pairs out of order | planarity error | seconds per stage |",
            "|---|---|---|---|---|---|---|---|---|---|"] + stage_rows + (turned_section(args) if args.no_rotated else [

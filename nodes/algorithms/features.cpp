@@ -2,6 +2,9 @@
 
 #include "runtime/errors.h"
 
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -42,9 +45,108 @@ struct ManifoldEdge {
   bool sharp;  ///< their normals differ by more than the threshold angle
 };
 
-/// Every edge of `surface` shared by exactly two triangles, sorted by (a, b).
+/// Point-segment distance.
+double segment_distance(const Vec3& x, const Vec3& a, const Vec3& b) {
+  const Vec3 d = b - a;
+  const double L2 = d.squaredNorm();
+  const double t = L2 > 0 ? std::clamp((x - a).dot(d) / L2, 0.0, 1.0) : 0.0;
+  return (x - (a + t * d)).norm();
+}
+
+/// A sharp edge at a scale turns by more than this many times the mean deviation of the normals on either side.
+constexpr double kSideRoughness = 3.0;
+
+/// The scale test of sharp_edges for the sharp edges of `edges`: each keeps `sharp` only if the mean normals
+/// of its two sides, over the triangles whose centroids lie within `scale` of it and beside it (not beyond its
+/// ends), differ by more than the
+/// angle whose cosine is cos_max. `area_normal`: per triangle its normal times twice its area.
+void sharp_at_scale(const SurfaceMesh& surface, const std::vector<std::array<int, 3>>& half,
+                    const std::vector<Vec3>& area_normal, double cos_max, double scale,
+                    std::vector<ManifoldEdge>& edges) {
+  const auto& V = surface.V;
+  const auto& F = surface.F;
+  const size_t nf = size_t(F.rows());
+  // triangle adjacency across every edge (non-manifold ones included: the surface is what it is)
+  std::vector<int> start(nf + 1, 0), adj;
+  {
+    std::vector<std::vector<int>> nb(nf);
+    for (size_t i = 0; i < half.size();) {
+      size_t j = i;
+      while (j < half.size() && half[j][0] == half[i][0] && half[j][1] == half[i][1]) ++j;
+      for (size_t u = i; u < j; ++u)
+        for (size_t w = i; w < j; ++w)
+          if (u != w) nb[size_t(half[u][2])].push_back(half[w][2]);
+      i = j;
+    }
+    for (size_t f = 0; f < nf; ++f) start[f + 1] = start[f] + int(nb[f].size());
+    for (auto& n : nb) adj.insert(adj.end(), n.begin(), n.end());
+  }
+  std::vector<Vec3> centroid(nf);
+  for (size_t f = 0; f < nf; ++f)
+    centroid[f] =
+        (V.row(F(Eigen::Index(f), 0)) + V.row(F(Eigen::Index(f), 1)) + V.row(F(Eigen::Index(f), 2))).transpose() / 3.0;
+  std::vector<size_t> sharp;
+  for (size_t e = 0; e < edges.size(); ++e)
+    if (edges[e].sharp) sharp.push_back(e);
+  tbb::enumerable_thread_specific<std::vector<size_t>> stamps([&] { return std::vector<size_t>(nf, 0); });
+  tbb::parallel_for(size_t(0), sharp.size(), [&](size_t i) {
+    ManifoldEdge& e = edges[sharp[i]];
+    std::vector<size_t>& seen = stamps.local();
+    const size_t stamp = sharp[i] + 1;  // distinct per edge: no clearing between the edges a thread does
+    const Vec3 a = V.row(e.a).transpose(), b = V.row(e.b).transpose();
+    const Vec3 u = (b - a).normalized(), m = 0.5 * (a + b);
+    auto across = [&](const Vec3& x) {  // the part of x - m across the edge
+      const Vec3 r = x - m;
+      return Vec3(r - r.dot(u) * u);
+    };
+    const Vec3 side = across(centroid[size_t(e.f0)]).normalized() - across(centroid[size_t(e.f1)]).normalized();
+    Vec3 sum[2] = {Vec3::Zero(), Vec3::Zero()};
+    std::vector<int> queue{e.f0, e.f1};
+    std::vector<int> sides;
+    seen[size_t(e.f0)] = seen[size_t(e.f1)] = stamp;
+    const double len = (b - a).norm();
+    for (size_t q = 0; q < queue.size(); ++q) {
+      const int f = queue[q];
+      // counted: the edge's two triangles, and those beside the edge, not beyond its ends (at a corner of a
+      // part, beyond the end lies a third face)
+      const double t = (centroid[size_t(f)] - a).dot(u) / len;
+      const int s = f == e.f0                                    ? 0
+                    : f == e.f1                                  ? 1
+                    : t <= 1e-6 || t >= 1 - 1e-6                 ? -1
+                    : across(centroid[size_t(f)]).dot(side) >= 0 ? 0
+                                                                 : 1;
+      if (s >= 0) sum[s] += area_normal[size_t(f)];
+      sides.push_back(s);
+      for (int k = start[size_t(f)]; k < start[size_t(f) + 1]; ++k) {
+        const int g = adj[size_t(k)];
+        if (seen[size_t(g)] == stamp) continue;
+        seen[size_t(g)] = stamp;
+        if (segment_distance(centroid[size_t(g)], a, b) <= scale) queue.push_back(g);
+      }
+    }
+    const double n0 = sum[0].norm(), n1 = sum[1].norm();
+    e.sharp = n0 > 0 && n1 > 0 && sum[0].dot(sum[1]) < cos_max * n0 * n1;
+    if (!e.sharp) return;
+    // ... and it turns more than the surface does on either side of it: kSideRoughness times the mean angle
+    // between a side's triangles and that side's mean normal
+    const double theta = std::acos(std::clamp(sum[0].dot(sum[1]) / (n0 * n1), -1.0, 1.0));
+    double spread[2] = {0, 0}, area[2] = {0, 0};
+    for (size_t q = 0; q < queue.size(); ++q) {
+      const Vec3& an = area_normal[size_t(queue[q])];
+      const double ar = an.norm();
+      if (!(ar > 0)) continue;
+      const int sd = sides[q];
+      if (sd < 0) continue;
+      spread[sd] += ar * std::acos(std::clamp(an.dot(sum[sd]) / (ar * (sd == 0 ? n0 : n1)), -1.0, 1.0));
+      area[sd] += ar;
+    }
+    e.sharp = theta > kSideRoughness * std::max(spread[0] / area[0], spread[1] / area[1]);
+  });
+}
+
+/// Every edge of `surface` shared by exactly two triangles, sorted by (a, b); `scale` as sharp_edges.
 /// \throw InvalidInput when a triangle index is out of range
-std::vector<ManifoldEdge> manifold_edges(const SurfaceMesh& surface, double angle_deg) {
+std::vector<ManifoldEdge> manifold_edges(const SurfaceMesh& surface, double angle_deg, double scale = 0) {
   const auto& V = surface.V;
   const auto& F = surface.F;
   const Eigen::Index nv = V.rows();
@@ -53,9 +155,10 @@ std::vector<ManifoldEdge> manifold_edges(const SurfaceMesh& surface, double angl
       if (F(f, k) < 0 || F(f, k) >= nv)
         throw InvalidInput(surface.source + ": triangle " + std::to_string(f) + " has vertex index " +
                            std::to_string(F(f, k)) + " outside 0.." + std::to_string(nv - 1));
-  std::vector<Vec3> normal(size_t(F.rows()), Vec3::Zero());
+  std::vector<Vec3> normal(size_t(F.rows()), Vec3::Zero()), area_normal(size_t(F.rows()));
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     const Vec3 n = (V.row(F(f, 1)) - V.row(F(f, 0))).cross(V.row(F(f, 2)) - V.row(F(f, 0))).transpose();
+    area_normal[size_t(f)] = n;
     if (n.norm() > 0) normal[size_t(f)] = n.normalized();
   }
   // edges as (low, high, face), sorted: an interior manifold edge appears twice
@@ -80,14 +183,15 @@ std::vector<ManifoldEdge> manifold_edges(const SurfaceMesh& surface, double angl
     }
     i = j;
   }
+  if (scale > 0) sharp_at_scale(surface, half, area_normal, cos_max, scale, out);
   return out;
 }
 
 }  // namespace
 
-std::vector<std::array<int, 2>> sharp_edges(const SurfaceMesh& surface, double angle_deg) {
+std::vector<std::array<int, 2>> sharp_edges(const SurfaceMesh& surface, double angle_deg, double scale) {
   std::vector<std::array<int, 2>> out;
-  for (const ManifoldEdge& e : manifold_edges(surface, angle_deg))
+  for (const ManifoldEdge& e : manifold_edges(surface, angle_deg, scale))
     if (e.sharp) out.push_back({e.a, e.b});
   return out;
 }
@@ -118,11 +222,11 @@ Eigen::VectorXi surface_patches(const SurfaceMesh& surface, double angle_deg, in
   return patch;
 }
 
-SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double min_length) {
+SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double min_length, double scale) {
   const auto& V = surface.V;
   const Eigen::Index nv = V.rows();
   std::vector<std::vector<int>> adj(static_cast<size_t>(nv));  // sharp-edge neighbours
-  for (const auto& [a, b] : sharp_edges(surface, angle_deg)) {
+  for (const auto& [a, b] : sharp_edges(surface, angle_deg, scale)) {
     adj[size_t(a)].push_back(b);
     adj[size_t(b)].push_back(a);
   }

@@ -27,11 +27,24 @@ struct SurfaceCreases {
   std::vector<Eigen::Vector3d> corners;             ///< crease vertices with >= 3 crease edges
 };
 
+/// The dihedral angle (degrees) above which the stages that follow sharp edges take an edge as one by default
+/// (boundary groups, the optimizer's crease candidate, the quality node's feature fidelity).
+inline constexpr double kFeatureAngle = 40.0;
+
 /// The sharp edges of a surface: edges shared by exactly two triangles whose normals differ by more than
 /// `angle_deg` (triangles of zero area make no sharp edge).
+///
+/// With `scale` > 0 the test also holds at that scale: the triangles within `scale` of the edge (their
+/// centroids, reached over the surface from the edge's two triangles) are split by the edge's two sides, and
+/// the area-weighted mean normals of the two sides must differ by more than `angle_deg` too, and by more than
+/// three times the mean angle between a side's triangles and its mean normal (the edge turns more than the
+/// surface does on either side of it). A part's edge passes: each side is a face. A scan's noise fails the
+/// first test once `scale` spans a few facets, its faceting the second: where the facets are as large as
+/// the scale, a scan turns about as much across each facet as across the edge. The stages take half a hex
+/// edge. A chamfer or step narrower than `scale` fails the second test (its other edge lies on one side).
 /// \return (low, high) vertex pairs, sorted
 /// \throw InvalidInput when a triangle index is out of range
-std::vector<std::array<int, 2>> sharp_edges(const SurfaceMesh& surface, double angle_deg);
+std::vector<std::array<int, 2>> sharp_edges(const SurfaceMesh& surface, double angle_deg, double scale = 0);
 
 /// The patches of a surface bounded by its sharp edges (sharp_edges): triangles connected across edges
 /// that are shared by two triangles and not sharp. A crease that does not close a region splits nothing.
@@ -43,8 +56,9 @@ Eigen::VectorXi surface_patches(const SurfaceMesh& surface, double angle_deg, in
 /// Finds the creases of a closed surface.
 /// \param angle_deg  a surface edge is sharp when its triangles' normals differ by more than this, (0, 180)
 /// \param min_length  lines shorter than this are dropped (noise), >= 0
+/// \param scale  > 0: the edges must be sharp at this scale as well (sharp_edges), >= 0
 /// \throw InvalidInput when a triangle index is out of range
-SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double min_length);
+SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double min_length, double scale = 0);
 
 /// Closest point of polyline `line` to x; `tangent` (optional) the unit direction of its segment (zero for a
 /// zero-length one).

@@ -416,6 +416,18 @@ HexQuality hex_quality(const HexMesh& mesh, const SurfaceMesh* surface, const Qu
     q.hausdorff_max = d.max_ba / q.bbox_diag;
     q.hausdorff_mean = d.mean_ba / q.bbox_diag;
   }
+  if (p.feature_angle > 0) {
+    const double h = median_boundary_edge(mesh.V, t.boundary);
+    if (h > 0) {
+      const SurfaceCreases creases = find_creases(*surface, p.feature_angle, 1.5 * h, 0.5 * h);
+      q.features = feature_fidelity(mesh.V, t.boundary, creases, p.feature_angle, h / 20);
+      q.has_features = true;
+      q.hex_edge = h / q.bbox_diag;
+      for (double* x : {&q.features.curve_length, &q.features.curve_to_mesh_max, &q.features.mesh_to_curve_max,
+                        &q.features.curve_to_mesh_mean})
+        *x /= q.bbox_diag;
+    }
+  }
   return q;
 }
 

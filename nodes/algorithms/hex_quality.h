@@ -15,6 +15,7 @@
 ///   the triangles), where hexcheck approximates it from the 24 nearest triangle centroids.
 #pragma once
 
+#include "nodes/algorithms/feature_fidelity.h"
 #include "nodes/artefacts/meshes.h"
 
 #include <Eigen/Core>
@@ -26,8 +27,10 @@
 namespace polyhex {
 
 struct QualityParams {
-  int samples = 100000;    ///< points sampled on each of the two surfaces for the distances
-  std::uint64_t seed = 1;  ///< seed of the sampler (fixed, so reports are reproducible)
+  int samples = 100000;                  ///< points sampled on each of the two surfaces for the distances
+  std::uint64_t seed = 1;                ///< seed of the sampler (fixed, so reports are reproducible)
+  double feature_angle = kFeatureAngle;  ///< feature fidelity: creases and hex feature edges sharper than this
+                                         ///< (degrees, features.h), 0 = not measured, [0, 179]
 };
 
 /// The figures of a hex mesh (keys of hexcheck.py in comments where the name differs).
@@ -54,6 +57,13 @@ struct HexQuality {
   /// measured before its repair) the distances are one-sided, surface -> hex boundary: the hex
   /// boundary over a hole has no surface to be near.
   bool surface_closed = true;
+  /// With a surface and feature_angle > 0: the hex edge the mesh was made at (median boundary edge), and
+  /// the distances between the surface's crease lines and the hex boundary's edges (feature_fidelity.h),
+  /// crease lines of at least 1.5 hex edges, sharp at half a hex edge (features.h sharp_edges); the hex
+  /// edge and the distances relative to bbox_diag.
+  bool has_features = false;
+  double hex_edge = 0;
+  FeatureFidelity features;
   Eigen::VectorXd sj;         ///< #H scaled Jacobian of every hex (centre term included)
   Eigen::VectorXd sj_corner;  ///< #H minimum corner scaled Jacobian of every hex
 };

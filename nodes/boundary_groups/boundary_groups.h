@@ -12,6 +12,7 @@
 /// can go either way.
 #pragma once
 
+#include "nodes/algorithms/features.h"
 #include "nodes/artefacts/meshes.h"
 #include "nodes/artefacts/polycube_map.h"
 #include "runtime/stat_fields.h"
@@ -19,9 +20,9 @@
 namespace polyhex {
 
 struct BoundaryGroupsParams {
-  bool charts = true;         ///< one group `chart_<id>` per PolyCube chart (needs a map with its segmentation)
-  double feature_angle = 40;  ///< one group `patch_<id>` per surface patch bounded by edges sharper than this (degrees,
-                              ///< [1, 179]; 0 = no patch groups; needs the surface)
+  bool charts = true;  ///< one group `chart_<id>` per PolyCube chart (needs a map with its segmentation)
+  double feature_angle = kFeatureAngle;  ///< one group `patch_<id>` per surface patch bounded by edges sharper than
+                                         ///< this (degrees, [1, 179]; 0 = no patch groups; needs the surface)
 };
 
 struct BoundaryGroupsStats {

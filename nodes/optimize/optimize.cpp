@@ -1,6 +1,7 @@
 // Hex mesh optimization (paper §6): untangle, max-min scaled Jacobian, shape improvement. See optimize.h.
 #include "nodes/optimize/optimize.h"
 
+#include "nodes/algorithms/feature_fidelity.h"
 #include "nodes/algorithms/features.h"
 #include "nodes/algorithms/hex_corners.h"
 #include "nodes/algorithms/hex_quality.h"
@@ -76,12 +77,7 @@ class Optimizer {
       if (boundary_[size_t(v)]) V_.row(v) = tree_.closest(V_.row(v).transpose()).point.transpose();
     released_.assign(size_t(V_.rows()), 0);
     if (p_.feature_angle > 0 && p_.move_boundary && Q.rows() > 0) {
-      // the hex edge length: median boundary edge
-      std::vector<double> len;
-      len.reserve(size_t(Q.rows()));
-      for (Eigen::Index q = 0; q < Q.rows(); ++q) len.push_back((V_.row(Q(q, 0)) - V_.row(Q(q, 1))).norm());
-      std::nth_element(len.begin(), len.begin() + long(len.size() / 2), len.end());
-      const double h = len[len.size() / 2];
+      const double h = median_boundary_edge(V_, Q);  // the hex edge length
       creases_ = find_creases(surface, p_.feature_angle, 1.5 * h);
       snap_ = snap_to_creases(V_, Q, creases_, h);
       st_.crease_lines = int(creases_.lines.size());

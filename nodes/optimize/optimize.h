@@ -12,6 +12,7 @@
 /// and why: docs/optimize.md.
 #pragma once
 
+#include "nodes/algorithms/features.h"
 #include "nodes/artefacts/meshes.h"
 #include "runtime/progress.h"
 #include "runtime/stat_fields.h"
@@ -50,8 +51,8 @@ struct OptimizeParams {
   bool release_boundary =
       true;  ///< last resort: boundary corners of hexes still inverted after untangling may leave the surface
   double feature_angle =
-      40;  ///< if the first result is poor (fallback_below_sj), a second candidate whose boundary vertices
-           ///< follow the surface's creases sharper than this (degrees, features.h), 0 = off, [0, 179]
+      kFeatureAngle;  ///< if the first result is poor (fallback_below_sj), a second candidate whose boundary vertices
+                      ///< follow the surface's creases sharper than this (degrees, features.h), 0 = off, [0, 179]
   double fallback_below_sj = 0.5;  ///< with a fallback mesh: also optimize it when the first result's minimum scaled
                                    ///< Jacobian is below this, [0, 1]
 };

@@ -39,4 +39,22 @@ inline nlohmann::json to_json(const HexQuality& q) {
   return j;
 }
 
+/// Beyond hexcheck: the feature fidelity (feature_fidelity.h), relative to bbox_diag, when q.has_features:
+/// hex_edge, feature_curves, feature_curve_length, feature_edges and, with a crease line,
+/// feature_curve_to_mesh_max / _mean and feature_mesh_to_curve_max. Empty otherwise.
+inline nlohmann::json feature_json(const HexQuality& q) {
+  nlohmann::json j = nlohmann::json::object();
+  if (!q.has_features) return j;
+  j["hex_edge"] = q.hex_edge;
+  j["feature_curves"] = q.features.curves;
+  j["feature_curve_length"] = q.features.curve_length;
+  j["feature_edges"] = q.features.mesh_feature_edges;
+  if (q.features.curves > 0) {
+    j["feature_curve_to_mesh_max"] = q.features.curve_to_mesh_max;
+    j["feature_curve_to_mesh_mean"] = q.features.curve_to_mesh_mean;
+    j["feature_mesh_to_curve_max"] = q.features.mesh_to_curve_max;
+  }
+  return j;
+}
+
 }  // namespace polyhex
