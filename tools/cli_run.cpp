@@ -4,8 +4,10 @@
 #include "runtime/errors.h"
 #include "runtime/progress.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <functional>
+#include <limits>
 #include <system_error>
 #include <unistd.h>
 
@@ -178,16 +180,32 @@ RunResult run_with_retry(const Pipeline& p, const std::optional<RetryPlan>& retr
     attempts.push_back(a);
     return a["accepted"].get<bool>();
   };
-  if (!best.error.empty()) return best;  // a failed first run is reported as it is
-  best_j = judge(best, plan.node);
-  bool accepted = record(best, json::object(), &best_j);
+  // A failed first run is reported as it is, unless it failed because every orientation branch did (a node
+  // of a branch threw: the input was read and meshed, a frame's structure or map was not sound): that is
+  // what the variants are for, and one of them may mesh it. A bad input fails before the branches.
+  const bool branches_failed =
+      !best.error.empty() && !best.interrupted &&
+      std::any_of(best.nodes.begin(), best.nodes.end(), [](const NodeRecord& n) { return !n.branch_error.empty(); });
+  if (!best.error.empty() && !branches_failed) return best;
+  bool accepted = false;
+  if (branches_failed) {
+    record(best, json::object(), nullptr);
+    best_j = {std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+  } else {
+    best_j = judge(best, plan.node);
+    accepted = record(best, json::object(), &best_j);
+  }
   for (size_t k = 0; k < plan.variants.size() && !accepted; ++k) {
     RunRequest v = base;
     v.out_dir = req.out_dir / (".retry-" + std::to_string(k + 1));
-    if (req.verbosity > 0 || ::isatty(STDERR_FILENO))
-      std::fprintf(stderr, "polyhex: retry %zu of %zu: %s (first run: %g inverted, minimum scaled Jacobian %.3f)\n",
-                   k + 1, plan.variants.size(), plan.variants[k].dump().c_str(), attempts[0]["inverted"].get<double>(),
-                   attempts[0]["sj_min"].get<double>());
+    if (req.verbosity > 0 || ::isatty(STDERR_FILENO)) {
+      const std::string first = branches_failed ? std::string("every orientation branch failed")
+                                                : (std::to_string(attempts[0]["inverted"].get<long>()) +
+                                                   " inverted, minimum scaled Jacobian " +
+                                                   std::to_string(attempts[0]["sj_min"].get<double>()));
+      std::fprintf(stderr, "polyhex: retry %zu of %zu: %s (first run: %s)\n", k + 1, plan.variants.size(),
+                   plan.variants[k].dump().c_str(), first.c_str());
+    }
     RunResult r = run_pipeline(plan.pipelines[k], v);
     total += r.seconds;
     if (r.interrupted) {
@@ -207,7 +225,8 @@ RunResult run_with_retry(const Pipeline& p, const std::optional<RetryPlan>& retr
     }
     const Judgement j = judge(r, plan.node);
     accepted = record(r, plan.variants[k], &j);
-    if (j.inverted < best_j.inverted || (j.inverted == best_j.inverted && j.sj_min > best_j.sj_min)) {
+    if (!best.error.empty() || j.inverted < best_j.inverted ||
+        (j.inverted == best_j.inverted && j.sj_min > best_j.sj_min)) {
       best = std::move(r);
       best_j = j;
       chosen = k + 1;

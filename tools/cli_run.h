@@ -9,11 +9,12 @@
 ///               "variants": [{"polycube.level_placement": "push_up"}]}
 ///
 /// A run is accepted when node `node` reports `inverted` <= max_inverted and `sj_min` >= min_sj. When
-/// the first run is not, the variants run one after the other (each: the config with its
-/// `"<id>.<param>": value` pairs set, into OUT/.retry-<k>, sharing the artefact cache so that only the
-/// nodes downstream of a changed param run again; with --no-cache a temporary cache OUT/.retry-cache
-/// serves the attempts and is removed), until one is accepted. The best attempt is kept: fewest inverted
-/// hexes, then the highest minimum scaled Jacobian (the first attempt wins a tie); its files are moved into
+/// the first run is not, or failed because every orientation branch failed (a node of a branch threw; a
+/// run that fails before the branches, on a bad input, is reported as it is), the variants run one after
+/// the other (each: the config with its `"<id>.<param>": value` pairs set, into OUT/.retry-<k>, sharing the artefact
+/// cache so that only the nodes downstream of a changed param run again; with --no-cache a temporary cache
+/// OUT/.retry-cache serves the attempts and is removed), until one is accepted. The best attempt is kept: fewest
+/// inverted hexes, then the highest minimum scaled Jacobian (the first attempt wins a tie); its files are moved into
 /// OUT and report.json is its report with `retry`: {node, max_inverted, min_sj, chosen (0 = the config as given),
 /// attempts:
 /// [{set, status, inverted, sj_min, seconds, accepted}]}; `seconds` is the time of all attempts.

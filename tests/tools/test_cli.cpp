@@ -172,6 +172,47 @@ fs::path retry_config(const fs::path& dir, const json& retry) {
 
 }  // namespace
 
+TEST_CASE("cli: a run whose every orientation branch fails tries the retry variants", "[cli]") {
+  fs::path out = polyhex::test::fresh_dir("cli_retry_branches");
+  // the map refuses in every branch (more hexes than max_hexes): the input was read and meshed, no frame was
+  auto cfg = [&](const json& variants) {
+    std::ifstream in(config("default.json"));
+    json j = json::parse(in);
+    for (auto& n : j["nodes"])
+      if (n["id"] == "polycube") n["params"]["max_hexes"] = 1000;
+    j["retry"]["variants"] = variants;
+    fs::path p = out / "branches.json";
+    std::ofstream(p) << j.dump(2);
+    return p.string();
+  };
+  CliRun r = run_polyhex("run " + cfg(json::array({{{"polycube.max_hexes", 2e7}}})) + " --out " + (out / "o").string() +
+                         " --hex-edge 0.035 --threads 2");
+  INFO(r.out);
+  REQUIRE(r.code == 0);
+  std::ifstream in(out / "o" / "report.json");
+  json rep = json::parse(in);
+  CHECK(rep["status"] == "ok");
+  const json& att = rep["retry"]["attempts"];
+  REQUIRE(att.size() == 2);
+  CHECK(att[0]["status"] == "error");
+  CHECK(att[0]["accepted"] == false);
+  CHECK(att[1]["status"] == "ok");
+  CHECK(rep["retry"]["chosen"] == 1);
+  CHECK(rep["nodes"]["quality"]["metrics"]["inverted"] == 0);
+  CHECK(fs::exists(out / "o" / "hex.vtk"));
+  // no variant helps: the first run's error, a non-zero exit and no mesh
+  CliRun f = run_polyhex("run " + cfg(json::array({{{"polycube.distance_weight", 2.0}}})) + " --out " +
+                         (out / "f").string() + " --hex-edge 0.035 --threads 2");
+  INFO(f.out);
+  CHECK(f.code != 0);
+  CHECK_THAT(f.out, Contains("node `best`"));
+  CHECK_FALSE(fs::exists(out / "f" / "hex.vtk"));
+  std::ifstream fin(out / "f" / "report.json");
+  json frep = json::parse(fin);
+  CHECK(frep["status"] == "error");
+  CHECK(frep["retry"]["attempts"].size() == 2);
+}
+
 TEST_CASE("cli: retry runs the variants while no attempt is accepted and keeps the best", "[cli]") {
   fs::path out = polyhex::test::fresh_dir("cli_retry");
   SECTION("never accepted: every variant runs, the best attempt's mesh and report are kept") {
