@@ -37,8 +37,10 @@ RetryPlan parse_retry(const json& block, const json& config, const Pipeline& bas
   if (!block.is_object())
     throw ConfigError(where + ": an object {node, max_inverted, min_sj, variants}, got " + block.dump());
   for (auto it = block.begin(); it != block.end(); ++it)
-    if (it.key() != "node" && it.key() != "max_inverted" && it.key() != "min_sj" && it.key() != "variants")
-      throw ConfigError(where + ": unknown key `" + it.key() + "`; valid keys: node, max_inverted, min_sj, variants");
+    if (it.key() != "node" && it.key() != "max_inverted" && it.key() != "min_sj" && it.key() != "variants" &&
+        it.key() != "on_failure")
+      throw ConfigError(where + ": unknown key `" + it.key() +
+                        "`; valid keys: node, max_inverted, min_sj, variants, on_failure");
   RetryPlan r;
   if (!block.contains("node") || !block["node"].is_string()) throw ConfigError(where + ": missing string `node`");
   r.node = block["node"].get<std::string>();
@@ -56,10 +58,17 @@ RetryPlan parse_retry(const json& block, const json& config, const Pipeline& bas
   number("min_sj", -1, 1, r.min_sj);
   if (!block.contains("variants") || !block["variants"].is_array() || block["variants"].empty())
     throw ConfigError(where + ": `variants` must be a non-empty array of {\"<id>.<param>\": value} objects");
-  if (block["variants"].size() > 16) throw ConfigError(where + ": more than 16 variants");
-  for (size_t k = 0; k < block["variants"].size(); ++k) {
-    const json& v = block["variants"][k];
-    const std::string w = where + ".variants[" + std::to_string(k) + "]";
+  if (block.contains("on_failure") && !block["on_failure"].is_array())
+    throw ConfigError(where + ": `on_failure` must be an array of {\"<id>.<param>\": value} objects");
+  json all = block["variants"];
+  r.regular = all.size();
+  if (block.contains("on_failure"))
+    for (const json& v : block["on_failure"]) all.push_back(v);
+  if (all.size() > 16) throw ConfigError(where + ": more than 16 variants");
+  for (size_t k = 0; k < all.size(); ++k) {
+    const json& v = all[k];
+    const std::string w = where + (k < r.regular ? ".variants[" + std::to_string(k) + "]"
+                                                 : ".on_failure[" + std::to_string(k - r.regular) + "]");
     if (!v.is_object() || v.empty()) throw ConfigError(w + ": a non-empty object {\"<id>.<param>\": value}");
     json c = variant_config(config, v, w);
     try {
@@ -196,6 +205,7 @@ RunResult run_with_retry(const Pipeline& p, const std::optional<RetryPlan>& retr
     accepted = record(best, json::object(), &best_j);
   }
   for (size_t k = 0; k < plan.variants.size() && !accepted; ++k) {
+    if (k >= plan.regular && best.error.empty()) break;  // on_failure: only while no attempt made a mesh
     RunRequest v = base;
     v.out_dir = req.out_dir / (".retry-" + std::to_string(k + 1));
     if (req.verbosity > 0 || ::isatty(STDERR_FILENO)) {

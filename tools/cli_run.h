@@ -21,6 +21,9 @@
 /// Why: the hex stage's outcome (the optimizer's minimum, whether a fold can be untangled) is sensitive to
 /// small changes of the map, so two equally sound variants of a stage each fail on some models where the
 /// other succeeds; trying the second only where the first falls short costs nothing where it does not.
+/// `on_failure` (optional): more variants, tried after `variants` only while no attempt has made a mesh
+/// (every one failed in all its orientation branches): the default configs run more frames there
+/// (`orient.within`), which would otherwise trade a frame's average for another's minimum.
 /// Every variant is checked (ids, params, ranges) before anything runs. `polyhex sweep` follows the block
 /// in every case (the variants set on top of the case's values); `polyhex bench` ignores it (it times one
 /// pipeline).
@@ -52,10 +55,11 @@ struct RunRequest {
 
 /// The parsed `retry` block of a config, with every variant's pipeline built.
 struct RetryPlan {
-  std::string node;                 ///< the node whose metrics judge a run
-  double max_inverted = 0;          ///< accepted when inverted <= this ...
-  double min_sj = 0;                ///< ... and sj_min >= this
-  std::vector<json> variants;       ///< per variant its {"<id>.<param>": value} object
+  std::string node;            ///< the node whose metrics judge a run
+  double max_inverted = 0;     ///< accepted when inverted <= this ...
+  double min_sj = 0;           ///< ... and sj_min >= this
+  std::vector<json> variants;  ///< per variant its {"<id>.<param>": value} object: `variants`, then `on_failure`
+  size_t regular = 0;          ///< how many of them are `variants` (the rest run only while no attempt made a mesh)
   std::vector<Pipeline> pipelines;  ///< per variant the pipeline it runs
 };
 

@@ -175,12 +175,13 @@ fs::path retry_config(const fs::path& dir, const json& retry) {
 TEST_CASE("cli: a run whose every orientation branch fails tries the retry variants", "[cli]") {
   fs::path out = polyhex::test::fresh_dir("cli_retry_branches");
   // the map refuses in every branch (more hexes than max_hexes): the input was read and meshed, no frame was
-  auto cfg = [&](const json& variants) {
+  auto cfg = [&](const json& variants, const json& on_failure = json::array()) {
     std::ifstream in(config("default.json"));
     json j = json::parse(in);
     for (auto& n : j["nodes"])
       if (n["id"] == "polycube") n["params"]["max_hexes"] = 1000;
     j["retry"]["variants"] = variants;
+    j["retry"]["on_failure"] = on_failure;
     fs::path p = out / "branches.json";
     std::ofstream(p) << j.dump(2);
     return p.string();
@@ -200,6 +201,16 @@ TEST_CASE("cli: a run whose every orientation branch fails tries the retry varia
   CHECK(rep["retry"]["chosen"] == 1);
   CHECK(rep["nodes"]["quality"]["metrics"]["inverted"] == 0);
   CHECK(fs::exists(out / "o" / "hex.vtk"));
+  // on_failure variants run after the others, while no attempt has made a mesh
+  CliRun o = run_polyhex(
+      "run " + cfg(json::array({{{"polycube.distance_weight", 2.0}}}), json::array({{{"polycube.max_hexes", 2e7}}})) +
+      " --out " + (out / "of").string() + " --hex-edge 0.035 --threads 2");
+  INFO(o.out);
+  REQUIRE(o.code == 0);
+  std::ifstream oin(out / "of" / "report.json");
+  const json orep = json::parse(oin);
+  CHECK(orep["retry"]["attempts"].size() == 3);
+  CHECK(orep["retry"]["chosen"] == 2);
   // no variant helps: the first run's error, a non-zero exit and no mesh
   CliRun f = run_polyhex("run " + cfg(json::array({{{"polycube.distance_weight", 2.0}}})) + " --out " +
                          (out / "f").string() + " --hex-edge 0.035 --threads 2");
@@ -218,7 +229,8 @@ TEST_CASE("cli: retry runs the variants while no attempt is accepted and keeps t
   SECTION("never accepted: every variant runs, the best attempt's mesh and report are kept") {
     fs::path cfg = retry_config(out, {{"node", "quality"},
                                       {"min_sj", 1.0},
-                                      {"variants", {{{"tets.edge_length", 0.1}}, {{"tets.edge_length", 0.12}}}}});
+                                      {"variants", {{{"tets.edge_length", 0.1}}, {{"tets.edge_length", 0.12}}}},
+                                      {"on_failure", {{{"tets.edge_length", 0.14}}}}});  // meshes were made: not run
     CliRun r = run_polyhex("run " + cfg.string() + " --out " + (out / "o").string() +
                            " --set tets.edge_length=0.08 --no-cache --threads 2");
     INFO(r.out);
@@ -289,5 +301,7 @@ TEST_CASE("cli: retry runs the variants while no attempt is accepted and keeps t
     fails({{"node", "quality"}, {"variants", {{{"tets.edge_lenght", 0.1}}}}}, "retry.variants[0]");
     fails({{"node", "quality"}, {"variants", json::array()}}, "`variants` must be a non-empty array");
     fails({{"node", "quality"}, {"min_sj", 2}, {"variants", {{{"tets.edge_length", 0.1}}}}}, "retry.min_sj");
+    fails({{"node", "quality"}, {"variants", {{{"tets.edge_length", 0.1}}}}, {"on_failure", {{{"tets.x", 1}}}}},
+          "retry.on_failure[0]");
   }
 }
