@@ -209,12 +209,12 @@ RunResult run_with_retry(const Pipeline& p, const std::optional<RetryPlan>& retr
     RunRequest v = base;
     v.out_dir = req.out_dir / (".retry-" + std::to_string(k + 1));
     if (req.verbosity > 0 || ::isatty(STDERR_FILENO)) {
-      const std::string first = branches_failed ? std::string("every orientation branch failed")
-                                                : (std::to_string(attempts[0]["inverted"].get<long>()) +
-                                                   " inverted, minimum scaled Jacobian " +
-                                                   std::to_string(attempts[0]["sj_min"].get<double>()));
+      char first[96] = "every orientation branch failed";
+      if (!branches_failed)
+        std::snprintf(first, sizeof first, "%ld inverted, minimum scaled Jacobian %.3f",
+                      attempts[0]["inverted"].get<long>(), attempts[0]["sj_min"].get<double>());
       std::fprintf(stderr, "polyhex: retry %zu of %zu: %s (first run: %s)\n", k + 1, plan.variants.size(),
-                   plan.variants[k].dump().c_str(), first.c_str());
+                   plan.variants[k].dump().c_str(), first);
     }
     RunResult r = run_pipeline(plan.pipelines[k], v);
     total += r.seconds;

@@ -57,9 +57,9 @@ double segment_distance(const Vec3& x, const Vec3& a, const Vec3& b) {
 constexpr double kSideRoughness = 3.0;
 
 /// The scale test of sharp_edges for the sharp edges of `edges`: each keeps `sharp` only if the mean normals
-/// of its two sides, over the triangles whose centroids lie within `scale` of it and beside it (not beyond its
-/// ends), differ by more than the
-/// angle whose cosine is cos_max. `area_normal`: per triangle its normal times twice its area.
+/// of its two sides, over the triangles whose centroids lie within `scale` of it and beside it (not beyond
+/// its ends), differ by more than the angle whose cosine is cos_max, and by more than kSideRoughness times
+/// the sides' own spread. `area_normal`: per triangle its normal times twice its area.
 void sharp_at_scale(const SurfaceMesh& surface, const std::vector<std::array<int, 3>>& half,
                     const std::vector<Vec3>& area_normal, double cos_max, double scale,
                     std::vector<ManifoldEdge>& edges) {
