@@ -2,6 +2,8 @@
 // feature_fidelity.h.
 #include "nodes/algorithms/feature_fidelity.h"
 
+#include "nodes/algorithms/triangle_tree.h"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -18,10 +20,7 @@ using Vec3 = Eigen::Vector3d;
 using Segment = std::pair<Vec3, Vec3>;
 
 double segment_distance(const Vec3& x, const Segment& s) {
-  const Vec3 d = s.second - s.first;
-  const double L2 = d.squaredNorm();
-  const double t = L2 > 0 ? std::clamp((x - s.first).dot(d) / L2, 0.0, 1.0) : 0.0;
-  return (x - (s.first + t * d)).norm();
+  return (closest_on_segment(x, s.first, s.second) - x).norm();
 }
 
 /// Exact distance from a point to the nearest of a set of segments: a uniform grid of cells, each listing the

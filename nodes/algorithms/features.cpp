@@ -1,5 +1,6 @@
 #include "nodes/algorithms/features.h"
 
+#include "nodes/algorithms/triangle_tree.h"
 #include "runtime/errors.h"
 
 #include <tbb/enumerable_thread_specific.h>
@@ -44,14 +45,6 @@ struct ManifoldEdge {
   int f0, f1;  ///< the two triangles
   bool sharp;  ///< their normals differ by more than the threshold angle
 };
-
-/// Point-segment distance.
-double segment_distance(const Vec3& x, const Vec3& a, const Vec3& b) {
-  const Vec3 d = b - a;
-  const double L2 = d.squaredNorm();
-  const double t = L2 > 0 ? std::clamp((x - a).dot(d) / L2, 0.0, 1.0) : 0.0;
-  return (x - (a + t * d)).norm();
-}
 
 /// A sharp edge at a scale turns by more than this many times the mean deviation of the normals on either side.
 constexpr double kSideRoughness = 3.0;
@@ -121,7 +114,7 @@ void sharp_at_scale(const SurfaceMesh& surface, const std::vector<std::array<int
         const int g = adj[size_t(k)];
         if (seen[size_t(g)] == stamp) continue;
         seen[size_t(g)] = stamp;
-        if (segment_distance(centroid[size_t(g)], a, b) <= scale) queue.push_back(g);
+        if ((closest_on_segment(centroid[size_t(g)], a, b) - centroid[size_t(g)]).norm() <= scale) queue.push_back(g);
       }
     }
     const double n0 = sum[0].norm(), n1 = sum[1].norm();
@@ -293,14 +286,15 @@ Vec3 closest_on_line(const std::vector<Vec3>& line, const Vec3& x, Vec3* tangent
   double best = std::numeric_limits<double>::infinity();
   Vec3 out = line.front();
   for (size_t k = 1; k < line.size(); ++k) {
-    const Vec3 a = line[k - 1], d = line[k] - a;
-    const double dd = d.squaredNorm();
-    const double t = dd > 0 ? std::clamp((x - a).dot(d) / dd, 0.0, 1.0) : 0.0;
-    const Vec3 p = a + t * d;
+    const Vec3 p = closest_on_segment(x, line[k - 1], line[k]);
     const double e = (p - x).squaredNorm();
     if (e < best) {
       best = e, out = p;
-      if (tangent) *tangent = dd > 0 ? Vec3(d / std::sqrt(dd)) : Vec3::Zero();
+      if (tangent) {
+        const Vec3 d = line[k] - line[k - 1];
+        const double dd = d.squaredNorm();
+        *tangent = dd > 0 ? Vec3(d / std::sqrt(dd)) : Vec3::Zero();
+      }
     }
   }
   return out;

@@ -10,8 +10,6 @@
 
 namespace polyhex {
 
-namespace {
-
 Eigen::Vector3d closest_on_segment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   const Eigen::Vector3d ab = b - a;
   const double len2 = ab.squaredNorm();
@@ -19,6 +17,8 @@ Eigen::Vector3d closest_on_segment(const Eigen::Vector3d& p, const Eigen::Vector
   const double t = std::clamp((p - a).dot(ab) / len2, 0.0, 1.0);
   return a + t * ab;
 }
+
+namespace {
 
 Eigen::Vector3d closest_on_edges(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                  const Eigen::Vector3d& c) {

@@ -13,6 +13,9 @@
 
 namespace polyhex {
 
+/// Closest point on the segment [a, b] to p (a when the segment has zero length).
+Eigen::Vector3d closest_on_segment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b);
+
 /// Closest point on the triangle (a, b, c) to p (Ericson, Real-Time Collision Detection, 5.1.5).
 /// Degenerate triangles (zero area, zero-length edges) are handled as the union of their edges.
 Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
