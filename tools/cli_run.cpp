@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cstdio>
 #include <functional>
-#include <limits>
 #include <system_error>
 #include <unistd.h>
 
@@ -198,8 +197,7 @@ RunResult run_with_retry(const Pipeline& p, const std::optional<RetryPlan>& retr
   if (!best.error.empty() && !branches_failed) return best;
   bool accepted = false;
   if (branches_failed) {
-    record(best, json::object(), nullptr);
-    best_j = {std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+    record(best, json::object(), nullptr);  // best_j is not read while best has no mesh
   } else {
     best_j = judge(best, plan.node);
     accepted = record(best, json::object(), &best_j);
