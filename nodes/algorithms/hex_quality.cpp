@@ -230,21 +230,38 @@ RowMatrixX3i quads_to_triangles(const RowMatrixX4iQ& q) {
   return t;
 }
 
-}  // namespace
+double corner_term(const std::array<Eigen::Vector3d, 8>& p, size_t k) {
+  const auto& c = kCorners[k];
+  return scaled(p[c[1]] - p[c[0]], p[c[2]] - p[c[0]], p[c[3]] - p[c[0]]);
+}
 
-HexSJ hex_scaled_jacobian(const std::array<Eigen::Vector3d, 8>& p, std::array<double, 9>& terms) {
+/// The centre term and the minima, from terms[0..7].
+HexSJ finish_terms(const std::array<Eigen::Vector3d, 8>& p, std::array<double, 9>& terms) {
   double corner_min = 1.0;
-  for (size_t k = 0; k < 8; ++k) {
-    const auto& c = kCorners[k];
-    terms[k] = scaled(p[c[1]] - p[c[0]], p[c[2]] - p[c[0]], p[c[3]] - p[c[0]]);
-    corner_min = std::min(corner_min, terms[k]);
-  }
+  for (size_t k = 0; k < 8; ++k) corner_min = std::min(corner_min, terms[k]);
   // Principal axes at the centre (Verdict): the averaged edge directions of the three axes.
   const Vec3 xi = (p[1] + p[2] + p[5] + p[6]) - (p[0] + p[3] + p[4] + p[7]);
   const Vec3 eta = (p[2] + p[3] + p[6] + p[7]) - (p[0] + p[1] + p[4] + p[5]);
   const Vec3 zeta = (p[4] + p[5] + p[6] + p[7]) - (p[0] + p[1] + p[2] + p[3]);
   terms[8] = scaled(xi, eta, zeta);
   return HexSJ{std::min(corner_min, terms[8]), corner_min};
+}
+
+}  // namespace
+
+HexSJ hex_scaled_jacobian(const std::array<Eigen::Vector3d, 8>& p, std::array<double, 9>& terms) {
+  for (size_t k = 0; k < 8; ++k) terms[k] = corner_term(p, k);
+  return finish_terms(p, terms);
+}
+
+HexSJ hex_scaled_jacobian_moved(const std::array<Eigen::Vector3d, 8>& p, int j, const std::array<double, 9>& before,
+                                std::array<double, 9>& terms) {
+  for (size_t k = 0; k < 8; ++k) {
+    const auto& c = kCorners[k];
+    const bool involves = int(c[0]) == j || int(c[1]) == j || int(c[2]) == j || int(c[3]) == j;
+    terms[k] = involves ? corner_term(p, k) : before[k];
+  }
+  return finish_terms(p, terms);
 }
 
 HexSJ hex_scaled_jacobian(const std::array<Eigen::Vector3d, 8>& p) {

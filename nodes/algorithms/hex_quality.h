@@ -81,6 +81,14 @@ HexSJ hex_scaled_jacobian(const std::array<Eigen::Vector3d, 8>& p);
 /// terms[8] the centre principal axes; sj is their minimum.
 HexSJ hex_scaled_jacobian(const std::array<Eigen::Vector3d, 8>& p, std::array<double, 9>& terms);
 
+/// The same after only corner j has moved: `before` holds the 9 terms of an earlier evaluation of this hex
+/// at which its other 7 corners were where they are now. The 4 corner terms that do not involve corner j
+/// (its 3 face-diagonal corners and the opposite one) are copied from it, the other 5 computed: the result
+/// and `terms` are bit for bit those of the full evaluation. The optimizer's per-vertex descents use it.
+/// \pre 0 <= j < 8
+HexSJ hex_scaled_jacobian_moved(const std::array<Eigen::Vector3d, 8>& p, int j, const std::array<double, 9>& before,
+                                std::array<double, 9>& terms);
+
 /// Scaled Jacobian of every hex (in parallel).
 /// \param sj         out: #H with the centre term  \param corner_min  out: #H corners only
 /// \pre indices of mesh.H in range (see check_hex_mesh)

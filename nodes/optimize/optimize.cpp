@@ -203,8 +203,14 @@ class Optimizer {
     for (size_t i = 0; i < size_t(nv); ++i) start_[i + 1] += start_[i];
     inc_.resize(size_t(start_.back()));
     std::vector<int> fill(start_.begin(), start_.end() - 1);
+    corner_.resize(inc_.size());
     for (Eigen::Index h = 0; h < H_.rows(); ++h)
-      for (int k = 0; k < 8; ++k) inc_[size_t(fill[size_t(H_(h, k))]++)] = int(h);
+      for (int k = 0; k < 8; ++k) {
+        const int v = H_(h, k);
+        const bool repeated = std::count(H_.row(h).data(), H_.row(h).data() + 8, v) > 1;
+        corner_[size_t(fill[size_t(v)])] = repeated ? -1 : k;
+        inc_[size_t(fill[size_t(v)]++)] = int(h);
+      }
     // edge neighbours, and the local edge length
     nbr_.assign(size_t(nv), {});
     using hex_topology::kEdges;
@@ -263,10 +269,28 @@ class Optimizer {
     double sj_sum;
     int inverted;  ///< incident hexes with a corner scaled Jacobian <= 0
   };
-  Local local(int v) const {
+  /// The 9 scaled-Jacobian terms of each hex around a vertex at a full evaluation (`local` with `fill`):
+  /// while only that vertex moves, the evaluations that are given them recompute the 5 terms of each hex
+  /// that it changes (hex_scaled_jacobian_moved), with the same figures bit for bit.
+  using Terms = std::vector<std::array<double, 9>>;
+
+  /// Scaled Jacobian of the hex of incidence slot i of vertex v (i from start_[v]): in full, or from
+  /// `base` (the terms of slot i - start_[v]) after only v has moved; `terms` gets its 9 terms.
+  HexSJ incident_sj(int v, int i, const Terms* base, std::array<double, 9>& terms) const {
+    const auto p = points(inc_[size_t(i)]);
+    const int j = corner_[size_t(i)];
+    if (!base || j < 0) return hex_scaled_jacobian(p, terms);
+    return hex_scaled_jacobian_moved(p, j, (*base)[size_t(i - start_[size_t(v)])], terms);
+  }
+
+  /// Local measures, in full (`fill`, if given, gets the terms for later evaluations) or from `base`.
+  Local local(int v, Terms* fill = nullptr, const Terms* base = nullptr) const {
     Local l{1.0, 0.0, 0};
+    if (fill) fill->resize(size_t(start_[size_t(v) + 1] - start_[size_t(v)]));
+    std::array<double, 9> ht;
     for (int i = start_[size_t(v)]; i < start_[size_t(v) + 1]; ++i) {
-      const HexSJ s = hex_scaled_jacobian(points(inc_[size_t(i)]));
+      const HexSJ s = incident_sj(v, i, base, ht);
+      if (fill) (*fill)[size_t(i - start_[size_t(v)])] = ht;
       l.sj_min = std::min(l.sj_min, s.sj);
       l.sj_sum += s.sj;
       l.inverted += s.corner_min <= 0;
@@ -280,8 +304,8 @@ class Optimizer {
     return e;
   }
   /// Soft minimum of the corner and centre scaled Jacobians of the hexes around v, negated (to be
-  /// minimised); `l` gets the local measures of the same evaluation.
-  double soft_min(int v, Local& l) const {
+  /// minimised); `l` gets the local measures of the same evaluation. `base`: as `local`'s.
+  double soft_min(int v, Local& l, const Terms& base) const {
     constexpr double beta = 40.0;
     l = Local{1.0, 0.0, 0};
     std::array<double, 72> terms;  // 9 per hex; a vertex in more than 8 hexes uses the vector below
@@ -290,7 +314,7 @@ class Optimizer {
     double* t = n <= 8 ? terms.data() : (more.resize(size_t(9 * n)), more.data());
     std::array<double, 9> ht;
     for (int i = 0; i < n; ++i) {
-      const HexSJ s = hex_scaled_jacobian(points(inc_[size_t(start_[size_t(v)] + i)]), ht);
+      const HexSJ s = incident_sj(v, start_[size_t(v)] + i, &base, ht);
       std::copy(ht.begin(), ht.end(), t + 9 * i);
       l.sj_min = std::min(l.sj_min, s.sj);
       l.sj_sum += s.sj;
@@ -510,9 +534,10 @@ class Optimizer {
       ++st_.untangle_sweeps;
       ++st_.iterations;
       sweep(sel, [&](int v) {
-        const int inv0 = local(v).inverted;
+        Terms base;
+        const int inv0 = local(v, &base).inverted;
         return descend(
-            v, [&] { return energy(v, eps); }, [&] { return local(v).inverted <= inv0; }, 0.5);
+            v, [&] { return energy(v, eps); }, [&] { return local(v, nullptr, &base).inverted <= inv0; }, 0.5);
       });
     }
   }
@@ -547,7 +572,8 @@ class Optimizer {
       ++st_.maxmin_sweeps;
       ++st_.iterations;
       const long moved = sweep(sel, [&](int v) {
-        const Local l0 = local(v);
+        Terms base;
+        const Local l0 = local(v, &base);
         // candidate: the average of the edge neighbours (interior vertices)
         Vec3 avg = Vec3::Zero();
         for (int w : nbr_[size_t(v)]) avg += V_.row(w).transpose();
@@ -557,7 +583,7 @@ class Optimizer {
         Local last{};
         auto ok = [&] { return last.inverted <= l0.inverted && last.sj_min > l0.sj_min + 1e-9; };
         return descend(
-            v, [&] { return soft_min(v, last); }, ok, 0.2, boundary_[size_t(v)] ? nullptr : &avg);
+            v, [&] { return soft_min(v, last, base); }, ok, 0.2, boundary_[size_t(v)] ? nullptr : &avg);
       });
       if (moved == 0) {
         if (worst_only) break;
@@ -751,16 +777,23 @@ class Optimizer {
       ++st_.iterations;
       const bool winslow = it % 2 == 0;
       const long moved = sweep(all, [&](int v) {
-        const Local l0 = local(v);
-        auto ok = [&] {
-          const Local l = local(v);
+        Terms base;
+        const Local l0 = local(v, &base);
+        auto better = [&](const Local& l) {
           return l.inverted <= l0.inverted && l.sj_min >= l0.sj_min && l.sj_sum >= l0.sj_sum;
         };
         if (winslow)
           return descend(
-              v, [&] { return energy(v, 1e-6); }, ok, 0.2);
+              v, [&] { return energy(v, 1e-6); }, [&] { return better(local(v, nullptr, &base)); }, 0.2);
+        // as in maxmin: `ok` reads the local measures of the objective's evaluation at the same position
+        Local last{};
         return descend(
-            v, [&] { return -local(v).sj_sum; }, ok, 0.2);
+            v,
+            [&] {
+              last = local(v, nullptr, &base);
+              return -last.sj_sum;
+            },
+            [&] { return better(last); }, 0.2);
       });
       if (moved == 0 && !winslow) break;
     }
@@ -774,6 +807,7 @@ class Optimizer {
   Clock::time_point t0_;
   double diag_ = 1;
   std::vector<int> start_, inc_;
+  std::vector<int> corner_;  ///< per incidence slot: the vertex's corner in the hex (-1: it is there twice)
   std::vector<std::vector<int>> nbr_;
   std::vector<double> scale_;
   std::vector<std::vector<int>> classes_;

@@ -147,6 +147,35 @@ TEST_CASE("quality: the centre term counts when it is the minimum", "[quality]")
   CHECK(q.inverted == 0);
 }
 
+TEST_CASE("quality: the scaled Jacobian after one corner moved equals the full evaluation bit for bit", "[quality]") {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> jitter(-0.35, 0.35);
+  const RowMatrixX3d P = cube_corners();
+  int copied_total = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    std::array<Eigen::Vector3d, 8> p;
+    for (int k = 0; k < 8; ++k) p[k] = P.row(k).transpose() + Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng));
+    std::array<double, 9> before, full, moved;
+    hex_scaled_jacobian(p, before);
+    const int j = trial % 8;
+    p[size_t(j)] += Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng));  // may invert corners
+    const HexSJ a = hex_scaled_jacobian(p, full);
+    const HexSJ b = hex_scaled_jacobian_moved(p, j, before, moved);
+    CHECK(a.sj == b.sj);
+    CHECK(a.corner_min == b.corner_min);
+    CHECK(full == moved);
+    // the 4 terms that do not involve corner j are taken from `before`: marked ones come back marked
+    std::array<double, 9> marked;
+    marked.fill(42.0);
+    hex_scaled_jacobian_moved(p, j, marked, moved);
+    int copied = 0;
+    for (size_t k = 0; k < 9; ++k) copied += moved[k] == 42.0;
+    CHECK(copied == 4);
+    copied_total += copied;
+  }
+  CHECK(copied_total == 800);
+}
+
 TEST_CASE("quality: inverted hexes are counted and reported, not rejected", "[quality]") {
   SECTION("top and bottom swapped: every corner is -1") {
     RowMatrixX3d P = cube_corners();
