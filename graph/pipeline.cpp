@@ -2,6 +2,7 @@
 
 #include "graph/cache.h"
 #include "runtime/atomic_file.h"
+#include "runtime/memory.h"
 #include "runtime/stopwatch.h"
 
 #include <oneapi/tbb/flow_graph.h>
@@ -246,6 +247,9 @@ class NodeRunner {
       }
     }
     rec.ran = true;
+    const ProcessMemory mem = process_memory();
+    rec.rss_mb = mem.rss_mb;
+    rec.peak_rss_mb = mem.peak_rss_mb;
     rec.metrics = std::move(ctx.metrics);
     rec.warnings = std::move(ctx.warnings);
     rec.warnings.insert(rec.warnings.end(), cache_warnings.begin(), cache_warnings.end());
@@ -292,6 +296,9 @@ class NodeRunner {
     identity_[i] = "d:" + hit.digest;
     rec.cache_hit = true;
     rec.ran = true;
+    const ProcessMemory mem = process_memory();
+    rec.rss_mb = mem.rss_mb;
+    rec.peak_rss_mb = mem.peak_rss_mb;
     rec.metrics = std::move(hit.metrics);
     rec.warnings = std::move(hit.warnings);
     rec.seconds = seconds_since(t0);
@@ -436,6 +443,7 @@ RunResult Pipeline::run(const RunOptions& opt) const {
   result.error = run_flow_graph(nodes_, threads, [&](size_t i) { runner.run(i); });
   result.interrupted = interrupted();
   result.seconds = seconds_since(t0);
+  result.peak_rss_mb = process_memory().peak_rss_mb;
   return result;
 }
 
@@ -445,6 +453,7 @@ json RunResult::report() const {
   r["status"] = status();
   if (!error.empty()) r["error"] = error;
   r["seconds"] = seconds;
+  r["peak_rss_mb"] = peak_rss_mb;
   json nodes_json = json::object();
   for (const NodeRecord& n : nodes) {
     json j;
@@ -453,6 +462,8 @@ json RunResult::report() const {
     if (n.skipped) j["skipped"] = true;
     if (!n.branch_error.empty()) j["branch_error"] = n.branch_error;
     j["seconds"] = n.seconds;
+    j["rss_mb"] = n.rss_mb;
+    j["peak_rss_mb"] = n.peak_rss_mb;
     j["cache_hit"] = n.cache_hit;
     j["metrics"] = n.metrics;
     j["warnings"] = n.warnings;

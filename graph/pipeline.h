@@ -33,6 +33,10 @@ struct ResolvedNode {
 struct NodeRecord {
   std::string id, type;
   double seconds = 0;
+  /// The process's resident memory when the node ended (runtime/memory.h), MiB: now and its high-water mark
+  /// so far. Nodes run side by side share the process, so a node's own share is the rise it shows over the
+  /// nodes that ended before it; 0 when not known (not Linux, or the node did not end).
+  double rss_mb = 0, peak_rss_mb = 0;
   bool cache_hit = false;  ///< the output, metrics and warnings were loaded from the artefact cache
   bool ran = false;        ///< the node completed (computed, or loaded from the cache)
   bool skipped = false;    ///< not run: a required input came from a node that produced nothing (NodeSpec::may_skip)
@@ -64,13 +68,14 @@ struct RunOptions {
 struct RunResult {
   std::vector<NodeRecord> nodes;  ///< in config order
   double seconds = 0;
+  double peak_rss_mb = 0;    ///< the process's resident high-water mark at the run's end, MiB (runtime/memory.h)
   std::string error;         ///< empty when the run succeeded
   bool interrupted = false;  ///< stopped by SIGINT/SIGTERM (error says where)
   json retry;                ///< the config's retry attempts (tools/cli_run.h); null when it has none
   /// "ok", "interrupted" or "error"
   std::string status() const { return error.empty() ? "ok" : interrupted ? "interrupted" : "error"; }
-  /// report.json: {polyhex_version, status, error?, seconds, nodes: {id: {type, ran, skipped?, seconds, cache_hit,
-  /// metrics, warnings}}, retry?}
+  /// report.json: {polyhex_version, status, error?, seconds, peak_rss_mb, nodes: {id: {type, ran, skipped?, seconds,
+  /// rss_mb, peak_rss_mb, cache_hit, metrics, warnings}}, retry?}
   json report() const;
 };
 

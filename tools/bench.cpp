@@ -15,11 +15,14 @@
 //                       analyse_seconds|factor_seconds|solve_seconds: {seconds: [repeat], min, median, max},
 //                       factor_seconds_each: median factor seconds / factorizations,
 //                       solves_per_second: solves / median solve seconds},
+//             rss_mb: the largest resident memory (MiB) at the node's end over the timed runs,
 //             metrics: the node's metrics of the last run}],
+//    peak_rss_mb: the process's resident high-water mark at the end (warm-up runs included),
 //    units: {stage: "unit: what is counted"}}
 // Medians of an even count are the mean of the two middle values.
 #include "graph/pipeline.h"
 #include "runtime/atomic_file.h"
+#include "runtime/memory.h"
 #include "tools/cli_run.h"
 #include "tools/commands.h"
 
@@ -147,6 +150,7 @@ int cmd_bench(BenchOptions o) {
   std::vector<std::vector<double>> seconds(nn);
   std::vector<std::map<std::string, std::vector<double>>> solver(nn);
   std::vector<json> metrics(nn, json::object());
+  std::vector<double> rss(nn, 0.0);
   std::vector<double> totals;
   FILE* table = o.json_path == "-" ? stderr : stdout;
   for (int k = 0; k < o.warmup + o.repeat; ++k) {
@@ -169,6 +173,7 @@ int cmd_bench(BenchOptions o) {
       const NodeRecord& n = r.nodes[i];
       seconds[i].push_back(n.seconds);
       metrics[i] = n.metrics;
+      rss[i] = std::max(rss[i], n.rss_mb);
       for (const char* key : kSolverSeconds)
         if (n.metrics.contains(key) && n.metrics[key].is_number())
           solver[i][key].push_back(n.metrics[key].get<double>());
@@ -189,6 +194,7 @@ int cmd_bench(BenchOptions o) {
   out["cache"] = false;
   out["started_utc"] = started;
   out["total"] = stats(totals);
+  out["peak_rss_mb"] = process_memory().peak_rss_mb;
   json units = json::object();
   for (const UnitRule& r : kUnits) units[r.stage] = std::string(r.unit) + ": " + r.doc;
   units["(other)"] =
@@ -227,6 +233,7 @@ int cmd_bench(BenchOptions o) {
       solver_lines.push_back(line);
       j["solver"] = s;
     }
+    j["rss_mb"] = rss[i];
     j["metrics"] = metrics[i];
     std::string tp = j["throughput"].is_number() ? std::to_string(long(j["throughput"].get<double>() + 0.5)) : "-";
     std::fprintf(table, "%-12s %-34s %9.3f %9.3f %9.3f %12s %s\n", n.id.c_str(), n.spec->type.c_str(), med,
@@ -237,6 +244,7 @@ int cmd_bench(BenchOptions o) {
   out["nodes"] = nodes;
   std::fprintf(table, "%-12s %-34s %9.3f %9.3f %9.3f\n", "total", "", out["total"]["median"].get<double>(),
                out["total"]["min"].get<double>(), out["total"]["max"].get<double>());
+  std::fprintf(table, "peak resident memory %.0f MiB\n", out["peak_rss_mb"].get<double>());
   if (!solver_lines.empty()) {
     std::fprintf(table, "factorization helper (CHOLMOD):\n");
     for (auto& l : solver_lines) std::fprintf(table, "  %s\n", l.c_str());

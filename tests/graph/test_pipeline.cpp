@@ -248,6 +248,13 @@ TEST_CASE("config branches: copies side by side, ${branch}, skipped copies", "[g
   CHECK(rep["nodes"]["scaled#2"]["skipped"] == true);
   CHECK_FALSE(rep["nodes"]["scaled#3"].contains("skipped"));
   CHECK(rep["nodes"]["sum"]["metrics"]["vertices"] == 4);
+  // resident memory at each node's end (runtime/memory.h): the run's high-water mark holds every node's
+  CHECK(rep["nodes"]["sum"]["rss_mb"].get<double>() > 0);
+  for (const auto& [id, n] : rep["nodes"].items())
+    if (n["ran"] == true) {
+      CHECK(n["peak_rss_mb"].get<double>() >= n["rss_mb"].get<double>());
+      CHECK(rep["peak_rss_mb"].get<double>() >= n["peak_rss_mb"].get<double>());
+    }
   json bad = json::parse(R"({"branches":{"count":2,"nodes":["keep"]},
       "nodes":[{"id":"src","type":"test_source/box"},
                {"id":"keep","type":"test_keep","inputs":{"surface":"src"}},

@@ -83,6 +83,8 @@ TEST_CASE("bench: the throughput config, coarse: JSON schema, units, solver figu
     CHECK(n["count"]["value"].get<double>() > 0);
     CHECK(n["throughput"].get<double>() > 0);
     CHECK(n["throughput"].get<double>() == Approx(n["count"]["value"].get<double>() / n["median"].get<double>()));
+    CHECK(n["rss_mb"].get<double>() > 0);
+    CHECK(n["rss_mb"].get<double>() <= b["peak_rss_mb"].get<double>());
     by_id[ids[i]] = n;
     CHECK_THAT(r.out, Contains(ids[i]));  // a table row per node
   }
@@ -106,6 +108,7 @@ TEST_CASE("bench: the throughput config, coarse: JSON schema, units, solver figu
   CHECK(s["solves_per_second"].get<double>() > 0);
   CHECK_FALSE(by_id["hex"].contains("solver"));
   CHECK_THAT(r.out, Contains("factorization helper (CHOLMOD):"));
+  CHECK_THAT(r.out, Contains("peak resident memory"));
   CHECK_THAT(r.err, Contains("timed run 3 of 3"));
 }
 
