@@ -256,11 +256,7 @@ HexSJ hex_scaled_jacobian(const std::array<Eigen::Vector3d, 8>& p, std::array<do
 
 HexSJ hex_scaled_jacobian_moved(const std::array<Eigen::Vector3d, 8>& p, int j, const std::array<double, 9>& before,
                                 std::array<double, 9>& terms) {
-  for (size_t k = 0; k < 8; ++k) {
-    const auto& c = kCorners[k];
-    const bool involves = int(c[0]) == j || int(c[1]) == j || int(c[2]) == j || int(c[3]) == j;
-    terms[k] = involves ? corner_term(p, k) : before[k];
-  }
+  for (size_t k = 0; k < 8; ++k) terms[k] = hex_topology::corner_uses(int(k), j) ? corner_term(p, k) : before[k];
   return finish_terms(p, terms);
 }
 

@@ -297,11 +297,33 @@ class Optimizer {
     }
     return l;
   }
-  double energy(int v, double eps) const {
+  /// The 8 Winslow terms of each hex around a vertex, as Terms for the scaled Jacobian.
+  using WinslowTerms = std::vector<std::array<double, 8>>;
+
+  /// Winslow energy of the hexes around v at ε, in full (`fill`, if given, gets the terms) or from `base`
+  /// (the terms of a full evaluation at the same ε) after only v has moved.
+  double energy(int v, double eps, WinslowTerms* fill = nullptr, const WinslowTerms* base = nullptr) const {
+    const int first = start_[size_t(v)];
+    if (fill) fill->resize(size_t(start_[size_t(v) + 1] - first));
+    std::array<double, 8> t;
     double e = 0;
-    for (int i = start_[size_t(v)]; i < start_[size_t(v) + 1]; ++i)
-      e += hex_winslow_energy(points(inc_[size_t(i)]), scale_[size_t(v)], eps);
+    for (int i = first; i < start_[size_t(v) + 1]; ++i) {
+      const auto p = points(inc_[size_t(i)]);
+      const int j = corner_[size_t(i)];
+      e += base && j >= 0 ? hex_winslow_energy_moved(p, j, scale_[size_t(v)], eps, (*base)[size_t(i - first)], t)
+                          : hex_winslow_energy(p, scale_[size_t(v)], eps, t);
+      if (fill) (*fill)[size_t(i - first)] = t;
+    }
     return e;
+  }
+  /// energy(v, eps) as descend()'s objective: its first call (at the start position) keeps the terms in
+  /// `base`, the later ones recompute only those that v changes.
+  auto winslow_objective(int v, double eps, WinslowTerms& base) const {
+    return [this, v, eps, &base, first = true]() mutable {
+      if (!first) return energy(v, eps, nullptr, &base);
+      first = false;
+      return energy(v, eps, &base);
+    };
   }
   /// Soft minimum of the corner and centre scaled Jacobians of the hexes around v, negated (to be
   /// minimised); `l` gets the local measures of the same evaluation. `base`: as `local`'s.
@@ -345,6 +367,7 @@ class Optimizer {
   }
 
   /// Moves vertex v to decrease f; `ok()` judges the trial position (V_ holds it). Returns true if moved.
+  /// f's first call is at v's start position (winslow_objective relies on it).
   template <class F, class Ok>
   bool descend(int v, F f, Ok ok, double first_step, const Vec3* extra = nullptr) {
     const Vec3 x0 = V_.row(v).transpose();
@@ -535,9 +558,10 @@ class Optimizer {
       ++st_.iterations;
       sweep(sel, [&](int v) {
         Terms base;
+        WinslowTerms wbase;
         const int inv0 = local(v, &base).inverted;
         return descend(
-            v, [&] { return energy(v, eps); }, [&] { return local(v, nullptr, &base).inverted <= inv0; }, 0.5);
+            v, winslow_objective(v, eps, wbase), [&] { return local(v, nullptr, &base).inverted <= inv0; }, 0.5);
       });
     }
   }
@@ -782,9 +806,11 @@ class Optimizer {
         auto better = [&](const Local& l) {
           return l.inverted <= l0.inverted && l.sj_min >= l0.sj_min && l.sj_sum >= l0.sj_sum;
         };
-        if (winslow)
+        if (winslow) {
+          WinslowTerms wbase;
           return descend(
-              v, [&] { return energy(v, 1e-6); }, [&] { return better(local(v, nullptr, &base)); }, 0.2);
+              v, winslow_objective(v, 1e-6, wbase), [&] { return better(local(v, nullptr, &base)); }, 0.2);
+        }
         // as in maxmin: `ok` reads the local measures of the objective's evaluation at the same position
         Local last{};
         return descend(
@@ -828,15 +854,36 @@ void summarise(const HexMesh& m, double& sj_min, double& sj_avg, long& inverted)
 
 }  // namespace
 
+namespace {
+
+double winslow_corner(const std::array<Eigen::Vector3d, 8>& p, size_t k, double scale, double eps) {
+  const auto& c = kCorners[k];
+  Eigen::Matrix3d J;
+  J.col(0) = (p[size_t(c[1])] - p[size_t(c[0])]) / scale;
+  J.col(1) = (p[size_t(c[2])] - p[size_t(c[0])]) / scale;
+  J.col(2) = (p[size_t(c[3])] - p[size_t(c[0])]) / scale;
+  return winslow_term(J, eps, nullptr, optimize_detail::CubeRoot::fast);
+}
+
+}  // namespace
+
 double hex_winslow_energy(const std::array<Eigen::Vector3d, 8>& p, double scale, double eps) {
+  std::array<double, 8> terms;
+  return hex_winslow_energy(p, scale, eps, terms);
+}
+
+double hex_winslow_energy(const std::array<Eigen::Vector3d, 8>& p, double scale, double eps,
+                          std::array<double, 8>& terms) {
   double e = 0;
-  for (const auto& c : kCorners) {
-    Eigen::Matrix3d J;
-    J.col(0) = (p[size_t(c[1])] - p[size_t(c[0])]) / scale;
-    J.col(1) = (p[size_t(c[2])] - p[size_t(c[0])]) / scale;
-    J.col(2) = (p[size_t(c[3])] - p[size_t(c[0])]) / scale;
-    e += winslow_term(J, eps, nullptr, optimize_detail::CubeRoot::fast);
-  }
+  for (size_t k = 0; k < 8; ++k) e += terms[k] = winslow_corner(p, k, scale, eps);
+  return e;
+}
+
+double hex_winslow_energy_moved(const std::array<Eigen::Vector3d, 8>& p, int j, double scale, double eps,
+                                const std::array<double, 8>& before, std::array<double, 8>& terms) {
+  double e = 0;
+  for (size_t k = 0; k < 8; ++k)
+    e += terms[k] = hex_topology::corner_uses(int(k), j) ? winslow_corner(p, k, scale, eps) : before[k];
   return e;
 }
 

@@ -153,5 +153,14 @@ HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback,
 /// corner's edge vectors divided by `scale`; 8 for a cube of edge `scale` as ε -> 0.
 /// \param p  8 corners in VTK_HEXAHEDRON order
 double hex_winslow_energy(const std::array<Eigen::Vector3d, 8>& p, double scale, double eps);
+/// The same, and its 8 corner terms (summed in corner order).
+double hex_winslow_energy(const std::array<Eigen::Vector3d, 8>& p, double scale, double eps,
+                          std::array<double, 8>& terms);
+/// The same after only corner j has moved: `before` holds the terms of an evaluation at the same scale and
+/// ε with the other 7 corners where they are now; the 4 corner terms that do not use corner j
+/// (hex_topology::corner_uses) are taken from it. Equal to the full evaluation bit for bit.
+/// \pre 0 <= j < 8
+double hex_winslow_energy_moved(const std::array<Eigen::Vector3d, 8>& p, int j, double scale, double eps,
+                                const std::array<double, 8>& before, std::array<double, 8>& terms);
 
 }  // namespace polyhex

@@ -7,6 +7,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <random>
 
 using namespace polyhex;
@@ -50,6 +51,36 @@ TEST_CASE("the Winslow energy of a cube is 8 at any scale and grows with distort
   CHECK(hex_winslow_energy(p, 1.0, 1e-9) == Approx(8.0).epsilon(1e-6));
   p[6] += Eigen::Vector3d(0.5, 0.3, -0.2);
   CHECK(hex_winslow_energy(p, 2.0, 1e-9) > 8.01);
+}
+
+TEST_CASE("optimize: the Winslow energy after one corner moved equals the full evaluation bit for bit", "[optimize]") {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> jitter(-0.3, 0.3);
+  int copied_total = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    std::array<Eigen::Vector3d, 8> p;
+    for (int k = 0; k < 8; ++k)
+      p[size_t(k)] = Eigen::Vector3d(k & 1 ? 1 : 0, k & 2 ? 1 : 0, k & 4 ? 1 : 0) +
+                     Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng));
+    std::swap(p[2], p[3]);  // VTK order: 0 1 2 3 around the bottom face
+    std::swap(p[6], p[7]);
+    const double scale = 0.5 + 0.01 * trial, eps = trial % 2 ? 1e-6 : 0.3;
+    std::array<double, 8> before, full, moved;
+    hex_winslow_energy(p, scale, eps, before);
+    const int j = trial % 8;
+    p[size_t(j)] += Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng));
+    const double a = hex_winslow_energy(p, scale, eps, full);
+    CHECK(a == hex_winslow_energy(p, scale, eps));
+    CHECK(hex_winslow_energy_moved(p, j, scale, eps, before, moved) == a);
+    CHECK(moved == full);
+    std::array<double, 8> marked;  // the 4 terms without corner j come from `before`
+    marked.fill(-7.0);
+    hex_winslow_energy_moved(p, j, scale, eps, marked, moved);
+    const int copied = int(std::count(moved.begin(), moved.end(), -7.0));
+    CHECK(copied == 4);
+    copied_total += copied;
+  }
+  CHECK(copied_total == 800);
 }
 
 TEST_CASE("optimizing a perturbed grid raises the minimum scaled Jacobian and keeps the boundary", "[optimize]") {
