@@ -20,6 +20,11 @@ struct LbfgsOptions {
   double gradient_tol = 0;  ///< stop (Stalled) when max |g_i| <= this
   double first_move = 1;    ///< a steepest-descent step moves no unknown by more than this
   int max_halvings = 40;    ///< the line search gives up (Stalled) after halving the step this many times
+  /// false: every trial of the line search asks f for the gradient too (cheapest when most first trials
+  /// pass). true: trials ask for the energy alone and the accepted one is evaluated again with its gradient:
+  /// cheaper when the line search often halves (a barrier energy). The iterates are the same either way
+  /// when f's value does not depend on whether the gradient is asked for.
+  bool gradient_on_accept = false;
 };
 
 enum class LbfgsEnd {
@@ -69,15 +74,15 @@ LbfgsEnd lbfgs_minimize(Eigen::VectorXd& x, Energy&& f, const LbfgsOptions& o, S
     VecX xn;
     double en = e;
     bool ok = false;
-    for (int k = 0; k < o.max_halvings;
-         ++k, step *= 0.5) {  // the gradient comes with each trial: most first trials pass
+    for (int k = 0; k < o.max_halvings; ++k, step *= 0.5) {
       xn = x + step * d;
-      en = f(xn, &gn);
+      en = f(xn, o.gradient_on_accept ? nullptr : &gn);
       if (std::isfinite(en) && en <= e + 1e-4 * step * slope) {
         ok = true;
         break;
       }
     }
+    if (ok && o.gradient_on_accept) en = f(xn, &gn);
     if (!ok) return LbfgsEnd::Stalled;
     VecX s = xn - x, y = gn - g;
     x = xn;

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <limits>
 #include <vector>
 
 using namespace polyhex;
@@ -94,4 +95,41 @@ TEST_CASE("lbfgs stalls, x unchanged, when no step decreases the energy within m
   CHECK(end == LbfgsEnd::Stalled);
   CHECK(x == x0);
   CHECK(evals == 1 + 5);  // the start, then one per halving
+}
+
+TEST_CASE("lbfgs with gradient_on_accept takes the same iterates, with gradients only at accepted points", "[lbfgs]") {
+  // a barrier (-log) along each axis: the unit step often leaves the domain and is halved
+  long value_calls = 0, gradient_calls = 0;
+  auto f = [&](const Eigen::VectorXd& x, Eigen::VectorXd* g) {
+    (g ? gradient_calls : value_calls)++;
+    double e = 0;
+    for (Eigen::Index i = 0; i < x.size(); ++i) {
+      const double a = 1.0 + double(i * i), t = 1.0 - x[i];
+      if (!(t > 0)) return std::numeric_limits<double>::infinity();
+      e += a * x[i] * x[i] - std::log(t) - 3.0 * x[i];
+      if (g) (*g)[i] = 2 * a * x[i] + 1.0 / t - 3.0;
+    }
+    return e;
+  };
+  auto run = [&](bool on_accept, long* iterations) {
+    Eigen::VectorXd x = Eigen::VectorXd::Constant(12, -2.0);
+    LbfgsOptions o;
+    o.iterations = 60;
+    o.first_move = 1.0;
+    o.gradient_on_accept = on_accept;
+    value_calls = gradient_calls = 0;
+    lbfgs_minimize(
+        x, f, o, [](int, const Eigen::VectorXd&, bool) { return false; }, iterations);
+    return x;
+  };
+  long it_a = 0, it_b = 0;
+  const Eigen::VectorXd a = run(false, &it_a);
+  const long trials = gradient_calls - 1;  // every trial asked for the gradient; the first call is the start
+  CHECK(value_calls == 0);
+  const Eigen::VectorXd b = run(true, &it_b);
+  CHECK(it_a == it_b);
+  CHECK(a == b);                      // bit for bit
+  CHECK(gradient_calls == it_b + 1);  // the start and one per accepted step
+  CHECK(value_calls == trials);
+  CHECK(trials > it_a);  // some first trials were rejected, so the option saved gradients
 }
