@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <deque>
+#include <functional>
 #include <vector>
 
 namespace polyhex {
@@ -25,6 +26,10 @@ struct LbfgsOptions {
   /// cheaper when the line search often halves (a barrier energy). The iterates are the same either way
   /// when f's value does not depend on whether the gradient is asked for.
   bool gradient_on_accept = false;
+  /// If set: applies M^-1 in place, M a symmetric positive definite approximation of the Hessian; the
+  /// two-loop recursion's initial inverse Hessian is then γ M^-1 (γ = s'y / y'M^-1 y of the newest pair)
+  /// instead of γ I (Nocedal and Wright, Numerical Optimization, 2nd ed., §7.2).
+  std::function<void(Eigen::VectorXd&)> precondition;
 };
 
 enum class LbfgsEnd {
@@ -58,7 +63,16 @@ LbfgsEnd lbfgs_minimize(Eigen::VectorXd& x, Energy&& f, const LbfgsOptions& o, S
       alpha[size_t(i)] = S[size_t(i)].dot(d) / Y[size_t(i)].dot(S[size_t(i)]);
       d -= alpha[size_t(i)] * Y[size_t(i)];
     }
-    if (!S.empty()) d *= S.back().dot(Y.back()) / Y.back().squaredNorm();
+    if (o.precondition) {
+      o.precondition(d);
+      if (!S.empty()) {
+        VecX my = Y.back();
+        o.precondition(my);
+        d *= S.back().dot(Y.back()) / Y.back().dot(my);
+      }
+    } else if (!S.empty()) {
+      d *= S.back().dot(Y.back()) / Y.back().squaredNorm();
+    }
     for (size_t i = 0; i < S.size(); ++i) {
       const double beta = Y[i].dot(d) / Y[i].dot(S[i]);
       d += (alpha[i] - beta) * S[i];
@@ -68,6 +82,7 @@ LbfgsEnd lbfgs_minimize(Eigen::VectorXd& x, Energy&& f, const LbfgsOptions& o, S
       S.clear();
       Y.clear();
       d = -g;
+      if (o.precondition) o.precondition(d);
       slope = g.dot(d);
     }
     double step = S.empty() ? std::min(1.0, o.first_move / d.lpNorm<Eigen::Infinity>()) : 1.0;

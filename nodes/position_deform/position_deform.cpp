@@ -462,6 +462,8 @@ void untangle(const TetMesh& input, const PolyCubeSegmentation& seg, const Posit
   up.rings = p.untangle_rings;
   up.seconds = p.untangle_seconds;
   up.polish_everywhere = p.map_polish == MapPolish::everywhere;
+  up.polish_iterations = p.map_polish_iterations;
+  up.polish_preconditioned = p.map_polish_preconditioner == MapPolishPreconditioner::laplacian;
   untangle_polycube_map(input.V, input.T, U, fixed_axes, up, &st.untangle);
 }
 

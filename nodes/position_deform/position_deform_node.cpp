@@ -39,6 +39,11 @@ const bool registered = register_node(
             .add_enum("map_polish", &P::map_polish,
                       {{MapPolish::region, "region"}, {MapPolish::everywhere, "everywhere"}},
                       "after the untangling, the barrier polish of the untangled region or of the whole map")
+            .add("map_polish_iterations", &P::map_polish_iterations, "L-BFGS iterations of the polish (0 = none)", 0,
+                 100000)
+            .add_enum("map_polish_preconditioner", &P::map_polish_preconditioner,
+                      {{MapPolishPreconditioner::none, "none"}, {MapPolishPreconditioner::laplacian, "laplacian"}},
+                      "the polish's L-BFGS plain, or preconditioned by the map energy's stiffness (fewer iterations)")
             .add("max_hexes", &P::max_hexes, "refuse up front when volume / h^3 exceeds this", 1e3, 2e9),
         {{"tets", artefact_name<TetMesh>()},
          {"deformed", artefact_name<TetMesh>()},

@@ -3,9 +3,11 @@
 
 #include "nodes/algorithms/hex_corners.h"
 #include "nodes/artefacts/cell_rings.h"
+#include "runtime/factorization.h"
 #include "runtime/lbfgs.h"
 #include "runtime/stopwatch.h"
 
+#include <Eigen/SparseCore>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -13,6 +15,7 @@
 #include <cmath>
 #include <initializer_list>
 #include <limits>
+#include <memory>
 
 namespace polyhex {
 namespace {
@@ -134,6 +137,7 @@ class MapUntangler {
       // The regularised barrier is finite (about |J|² / ε^{2/3} at det 0), so a tet shrinking as a whole can
       // still turn over: the state is checked every 5 iterations and the polish ends at the last valid one.
       VecX x = VecX::Zero(ndof_), good = x;
+      st_.polish_energy_before += energy(x, 1e-10, nullptr);
       auto stop = [&](int done, const VecX& y, bool after_step) {
         if (!after_step) return out_of_time();
         if (done % 5 != 0) return false;
@@ -148,16 +152,64 @@ class MapUntangler {
         apply(x);
         if (count_inverted() == 0) good = x;
       }
-      apply(good);
+      st_.polish_energy_after += energy(good, 1e-10, nullptr);  // leaves the map at `good`
     }
   }
 
   /// At ε -> 0 the barrier rejects many first trials (on the bench workload 2.25 trials per iteration):
-  /// the trials skip the gradient.
-  LbfgsOptions polish_options() const {
+  /// the trials skip the gradient. With polish_preconditioned, the stiffness is factored here.
+  LbfgsOptions polish_options() {
     LbfgsOptions o = options(p_.polish_iterations);
     o.gradient_on_accept = true;
+    if (p_.polish_preconditioned && ndof_ > 0) {
+      const auto t0 = std::chrono::steady_clock::now();
+      auto factor = std::make_shared<CholmodFactorization>(stiffness());
+      st_.polish_factor_seconds += seconds_since(t0);
+      o.precondition = [factor](VecX& d) { d = factor->solve(d); };
+    }
     return o;
+  }
+
+  /// The energy's stiffness at the current map: per axis, Σ over the active tets of v_t 2 ∇φ_i·∇φ_j /
+  /// (3 det J^{2/3}) between the unknowns of that axis (∇φ the hat functions' gradients on the input tet):
+  /// the Hessian of the |J|² part at fixed determinants, a weighted Laplacian; the fixed axes of a vertex
+  /// are its Dirichlet conditions.
+  Eigen::SparseMatrix<double> stiffness() const {
+    std::vector<Eigen::Triplet<double>> trip;
+    trip.reserve(active_.size() * 30);
+    auto unknown = [&](int v, int axis) {
+      const int d = dof_[size_t(v)];
+      if (d < 0) return -1;
+      const auto& ax = axes_[size_t(slot_[size_t(v)])];
+      for (int j = 0; j < 3 && ax[size_t(j)] >= 0; ++j)
+        if (ax[size_t(j)] == axis) return d + j;
+      return -1;
+    };
+    for (size_t a = 0; a < active_.size(); ++a) {
+      const double det = jacobian(a).determinant();
+      if (!(det > 0)) continue;
+      const double c = weight_[a] * 2.0 / (3.0 * std::cbrt(det * det));
+      const Mat3& R = rinv_[a];
+      std::array<Vec3, 4> grad;
+      grad[0] = -R.colwise().sum().transpose();
+      for (int k = 1; k < 4; ++k) grad[size_t(k)] = R.row(k - 1).transpose();
+      for (int axis = 0; axis < 3; ++axis)
+        for (int k = 0; k < 4; ++k) {
+          const int i = unknown(T_(active_[a], k), axis);
+          if (i < 0) continue;
+          for (int l = 0; l < 4; ++l) {
+            const int j = unknown(T_(active_[a], l), axis);
+            if (j >= 0 && j <= i) trip.emplace_back(i, j, c * grad[size_t(k)].dot(grad[size_t(l)]));
+          }
+        }
+    }
+    Eigen::SparseMatrix<double> M(ndof_, ndof_);
+    M.setFromTriplets(trip.begin(), trip.end());
+    double mean = 0;
+    for (Eigen::Index i = 0; i < ndof_; ++i) mean += M.coeff(i, i);
+    mean /= double(std::max<Eigen::Index>(ndof_, 1));
+    for (Eigen::Index i = 0; i < ndof_; ++i) M.coeffRef(i, i) += 1e-6 * mean + (M.coeff(i, i) > 0 ? 0.0 : mean);
+    return M;
   }
 
   LbfgsOptions options(int iterations) const {
@@ -251,12 +303,12 @@ class MapUntangler {
         free_.push_back(int(v));
       }
     st_.free_vertices = std::max(st_.free_vertices, long(free_.size()));
-    std::vector<int> slot(size_t(nv), -1);
-    for (size_t i = 0; i < free_.size(); ++i) slot[size_t(free_[i])] = int(i);
+    slot_.assign(size_t(nv), -1);
+    for (size_t i = 0; i < free_.size(); ++i) slot_[size_t(free_[i])] = int(i);
     double vol_sum = 0, edge_sum = 0;
     for (Eigen::Index t = 0; t < nt; ++t) {
       bool any = false;
-      for (int k = 0; k < 4 && !any; ++k) any = slot[size_t(T_(t, k))] >= 0;
+      for (int k = 0; k < 4 && !any; ++k) any = slot_[size_t(T_(t, k))] >= 0;
       if (!any || skip[size_t(t)]) continue;
       active_.push_back(int(t));
       Mat3 D;
@@ -271,7 +323,7 @@ class MapUntangler {
     // weights floored: a sliver's tiny weight would make its barrier too weak to keep it from inverting
     for (double& w : weight_) w = mean_vol > 0 ? std::max(w / mean_vol, kMinWeight) : 1.0;
     mean_edge_ = active_.empty() || edge_sum <= 0 ? 1.0 : edge_sum / (3.0 * double(active_.size()));
-    inc_ = cell_incidence(T_, active_, slot, free_.size());  // by tet index: a fixed order
+    inc_ = cell_incidence(T_, active_, slot_, free_.size());  // by tet index: a fixed order
     tet_energy_.assign(active_.size(), 0.0);
     tet_grad_.assign(active_.size(), Mat43::Zero());
   }
@@ -361,6 +413,7 @@ class MapUntangler {
   std::vector<Vec3> base_;
   std::vector<double> tet_energy_;
   std::vector<Mat43> tet_grad_;
+  std::vector<int> slot_;  ///< #V index in free_, -1 for a vertex that does not move
 };
 
 }  // namespace

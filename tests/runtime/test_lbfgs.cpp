@@ -133,3 +133,28 @@ TEST_CASE("lbfgs with gradient_on_accept takes the same iterates, with gradients
   CHECK(value_calls == trials);
   CHECK(trials > it_a);  // some first trials were rejected, so the option saved gradients
 }
+
+TEST_CASE("lbfgs with the exact Hessian as preconditioner solves an ill-conditioned quadratic at once", "[lbfgs]") {
+  // f = Σ a_i (x_i - i)², a from 1 to 1e6; M = diag(2 a): the preconditioned steepest descent is Newton's step
+  const int n = 30;
+  Eigen::VectorXd a(n);
+  for (int i = 0; i < n; ++i) a[i] = std::pow(10.0, 6.0 * i / (n - 1));
+  const Eigen::VectorXd target = Eigen::VectorXd::LinSpaced(n, 0, n - 1);
+  auto quad = [&](const Eigen::VectorXd& x, Eigen::VectorXd* g) {
+    const Eigen::VectorXd d = x - target;
+    if (g) *g = 2 * a.cwiseProduct(d);
+    return d.dot(a.cwiseProduct(d));
+  };
+  auto error_after = [&](int iterations, bool precondition) {  // max |x_i - i| after that many iterations
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
+    LbfgsOptions o;
+    o.iterations = iterations;
+    o.first_move = 1e9;  // let the first step be the preconditioned one
+    if (precondition) o.precondition = [&](Eigen::VectorXd& d) { d = d.cwiseQuotient(2 * a); };
+    lbfgs_minimize(x, quad, o, [](int, const Eigen::VectorXd&, bool) { return false; });
+    return (x - target).lpNorm<Eigen::Infinity>();
+  };
+  CHECK(error_after(2, true) < 1e-9);
+  CHECK(error_after(2, false) > 1.0);
+  CHECK(error_after(20, false) > 1e-3);
+}
