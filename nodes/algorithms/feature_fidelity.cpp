@@ -19,10 +19,6 @@ namespace {
 using Vec3 = Eigen::Vector3d;
 using Segment = std::pair<Vec3, Vec3>;
 
-double segment_distance(const Vec3& x, const Segment& s) {
-  return (closest_on_segment(x, s.first, s.second) - x).norm();
-}
-
 /// Exact distance from a point to the nearest of a set of segments: a uniform grid of cells, each listing the
 /// segments whose bounding boxes overlap it, searched in growing shells of cells around the query until no
 /// nearer segment can lie further out.
@@ -68,12 +64,14 @@ class SegmentGrid {
       // a segment first met in shell r + 1 or later is at least r cells away
       if (best <= double(r - 1) * cell_) break;
       if (r > 24) {  // far from every segment: look at all of them
-        for (const auto& s : segs_) best = std::min(best, segment_distance(p, s));
+        for (const auto& s : segs_) best = std::min(best, segment_distance(p, s.first, s.second));
         break;
       }
       visit_shell(c, r, [&](size_t bin) {
-        for (int k = start_[bin]; k < start_[bin + 1]; ++k)
-          best = std::min(best, segment_distance(p, segs_[size_t(items_[size_t(k)])]));
+        for (int k = start_[bin]; k < start_[bin + 1]; ++k) {
+          const Segment& s = segs_[size_t(items_[size_t(k)])];
+          best = std::min(best, segment_distance(p, s.first, s.second));
+        }
       });
     }
     return best;

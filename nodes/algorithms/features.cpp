@@ -114,7 +114,7 @@ void sharp_at_scale(const SurfaceMesh& surface, const std::vector<std::array<int
         const int g = adj[size_t(k)];
         if (seen[size_t(g)] == stamp) continue;
         seen[size_t(g)] = stamp;
-        if ((closest_on_segment(centroid[size_t(g)], a, b) - centroid[size_t(g)]).norm() <= scale) queue.push_back(g);
+        if (segment_distance(centroid[size_t(g)], a, b) <= scale) queue.push_back(g);
       }
     }
     const double n0 = sum[0].norm(), n1 = sum[1].norm();

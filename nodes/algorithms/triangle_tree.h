@@ -15,6 +15,10 @@ namespace polyhex {
 
 /// Closest point on the segment [a, b] to p (a when the segment has zero length).
 Eigen::Vector3d closest_on_segment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b);
+/// Distance from p to the segment [a, b]: |closest_on_segment(p, a, b) - p|.
+inline double segment_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return (closest_on_segment(p, a, b) - p).norm();
+}
 
 /// Closest point on the triangle (a, b, c) to p (Ericson, Real-Time Collision Detection, 5.1.5).
 /// Degenerate triangles (zero area, zero-length edges) are handled as the union of their edges.
