@@ -247,9 +247,7 @@ class NodeRunner {
       }
     }
     rec.ran = true;
-    const ProcessMemory mem = process_memory();
-    rec.rss_mb = mem.rss_mb;
-    rec.peak_rss_mb = mem.peak_rss_mb;
+    record_memory(rec);
     rec.metrics = std::move(ctx.metrics);
     rec.warnings = std::move(ctx.warnings);
     rec.warnings.insert(rec.warnings.end(), cache_warnings.begin(), cache_warnings.end());
@@ -284,6 +282,13 @@ class NodeRunner {
     return n.input_nodes.empty() ? keys_[i] : node_key(*n.spec, n.params, in_ids);
   }
 
+  /// The process's memory as node `rec` ends (NodeRecord::rss_mb).
+  static void record_memory(NodeRecord& rec) {
+    const ProcessMemory mem = process_memory();
+    rec.rss_mb = mem.rss_mb;
+    rec.peak_rss_mb = mem.peak_rss_mb;
+  }
+
   /// Loads node i from the cache; false when it is not there (an invalid entry adds a warning).
   bool load_cached(size_t i, const std::string& key, Clock::time_point t0, std::vector<std::string>& warnings) {
     const ResolvedNode& n = nodes_[i];
@@ -296,9 +301,7 @@ class NodeRunner {
     identity_[i] = "d:" + hit.digest;
     rec.cache_hit = true;
     rec.ran = true;
-    const ProcessMemory mem = process_memory();
-    rec.rss_mb = mem.rss_mb;
-    rec.peak_rss_mb = mem.peak_rss_mb;
+    record_memory(rec);
     rec.metrics = std::move(hit.metrics);
     rec.warnings = std::move(hit.warnings);
     rec.seconds = seconds_since(t0);
