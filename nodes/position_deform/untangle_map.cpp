@@ -208,7 +208,10 @@ class MapUntangler {
     double mean = 0;
     for (Eigen::Index i = 0; i < ndof_; ++i) mean += M.coeff(i, i);
     mean /= double(std::max<Eigen::Index>(ndof_, 1));
-    for (Eigen::Index i = 0; i < ndof_; ++i) M.coeffRef(i, i) += 1e-6 * mean + (M.coeff(i, i) > 0 ? 0.0 : mean);
+    for (Eigen::Index i = 0; i < ndof_; ++i) {  // a small shift keeps it positive definite; an empty row gets the mean
+      const double d = M.coeff(i, i);
+      M.coeffRef(i, i) += 1e-6 * mean + (d > 0 ? 0.0 : mean);
+    }
     return M;
   }
 
