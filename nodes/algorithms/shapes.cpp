@@ -1,5 +1,6 @@
 /// @file shapes.cpp
-/// @brief Built-in closed surfaces: analytic parametrisations (sphere, torus, bumpy torus, box) and
+/// @brief Built-in closed surfaces: analytic parametrisations (sphere, torus, bumpy torus, box), exact
+/// polyhedral solids with sharp edges (sharp L-block, chamfered box, filleted cylinder) and
 /// CSG solids given by signed distance functions, sampled into an OpenVDB narrow-band level set and
 /// meshed with openvdb::tools::volumeToMesh (rod with holes, L-block, bent pipe, fandisk-like block).
 #include "nodes/algorithms/shapes.h"
@@ -360,10 +361,155 @@ SurfaceMesh make_fandisk_like(int res) {
   return mesh_sdf(f, Vec3(0, 0, 0), Vec3(1.0, 0.6, 0.55), res, "fandisk_like");
 }
 
+// ---------------------------------------------------------------------------------------------
+// Exact polyhedral solids with sharp edges (CAD-like: the creases are the solid's own, not a level
+// set's rounding), built from structured quad grids so that no triangle is a sliver.
+
+/// A planar quad mesh of a cross-section: points (u, w) and quads counter-clockwise.
+struct Section {
+  std::vector<Eigen::Vector2d> P;
+  std::vector<std::array<int, 4>> Q;
+};
+
+/// Adds to `s` the grid of quad (a, b, c, d) (counter-clockwise corners), nu x nw cells, bilinear; points on
+/// its sides are shared with quads added before (matched by position).
+void add_grid(Section& s, const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,
+              const Eigen::Vector2d& d, int nu, int nw) {
+  auto id = [&](const Eigen::Vector2d& x) {
+    for (size_t i = 0; i < s.P.size(); ++i)
+      if ((s.P[i] - x).norm() < 1e-12) return int(i);
+    s.P.push_back(x);
+    return int(s.P.size()) - 1;
+  };
+  std::vector<int> g(size_t((nu + 1) * (nw + 1)));
+  for (int j = 0; j <= nw; ++j)
+    for (int i = 0; i <= nu; ++i) {
+      const double u = double(i) / nu, w = double(j) / nw;
+      g[size_t(j * (nu + 1) + i)] = id((1 - u) * (1 - w) * a + u * (1 - w) * b + u * w * c + (1 - u) * w * d);
+    }
+  for (int j = 0; j < nw; ++j)
+    for (int i = 0; i < nu; ++i)
+      s.Q.push_back({g[size_t(j * (nu + 1) + i)], g[size_t(j * (nu + 1) + i + 1)],
+                     g[size_t((j + 1) * (nu + 1) + i + 1)], g[size_t((j + 1) * (nu + 1) + i)]});
+}
+
+/// The closed surface of a cross-section (in the xz plane) extruded along y over [0, length] in `layers`.
+SurfaceMesh extrude(const Section& s, double length, int layers, const std::string& name) {
+  std::vector<Vec3> V;
+  std::vector<Eigen::Vector3i> F;
+  const int n = int(s.P.size());
+  for (int l = 0; l <= layers; ++l)
+    for (const auto& p : s.P) V.emplace_back(p[0], length * l / layers, p[1]);
+  auto at = [&](int i, int l) { return l * n + i; };
+  for (const auto& q : s.Q) {  // caps: y = 0 faces -y, y = length faces +y (pack orients the whole)
+    add_quad(V, F, at(q[0], 0), at(q[1], 0), at(q[2], 0), at(q[3], 0));
+    add_quad(V, F, at(q[3], layers), at(q[2], layers), at(q[1], layers), at(q[0], layers));
+  }
+  std::map<std::pair<int, int>, int> uses;  // section edges in one quad only: the outline
+  for (const auto& q : s.Q)
+    for (int k = 0; k < 4; ++k) ++uses[{std::min(q[k], q[(k + 1) % 4]), std::max(q[k], q[(k + 1) % 4])}];
+  for (const auto& q : s.Q)
+    for (int k = 0; k < 4; ++k) {
+      const int a = q[k], b = q[(k + 1) % 4];
+      if (uses[{std::min(a, b), std::max(a, b)}] != 1) continue;
+      for (int l = 0; l < layers; ++l) add_quad(V, F, at(b, l), at(a, l), at(a, l + 1), at(b, l + 1));
+    }
+  return pack(V, std::move(F), name);
+}
+
+/// Cells of about `step` along a side of length `len` (at least one).
+int cells(double len, double step) { return std::max(1, int(std::lround(len / step))); }
+
+/// An exact L-shaped block, the l_block's solid without the level set's rounding: a 1 x 0.5 x 0.3 foot and a
+/// 0.3 x 0.5 x 0.5 upright on its end (cross-section in xz, extruded along y). Sharp edges, genus 0.
+SurfaceMesh make_sharp_l_block(int res) {
+  const double step = 1.0 / res;
+  Section s;
+  using P2 = Eigen::Vector2d;
+  add_grid(s, P2(0, 0), P2(0.3, 0), P2(0.3, 0.3), P2(0, 0.3), cells(0.3, step), cells(0.3, step));
+  add_grid(s, P2(0.3, 0), P2(1, 0), P2(1, 0.3), P2(0.3, 0.3), cells(0.7, step), cells(0.3, step));
+  add_grid(s, P2(0, 0.3), P2(0.3, 0.3), P2(0.3, 0.8), P2(0, 0.8), cells(0.3, step), cells(0.5, step));
+  return extrude(s, 0.5, cells(0.5, step), "sharp_l_block");
+}
+
+/// A 1 x 0.6 x 0.4 box (cross-section 1 x 0.4 in xz, extruded 0.6 along y) with its top edge at x = 1
+/// chamfered at 45 degrees, 0.15 wide along each face: two creases of 45 degrees and the box's of 90.
+SurfaceMesh make_chamfered_box(int res) {
+  const double step = 1.0 / res, c = 0.15;
+  Section s;
+  using P2 = Eigen::Vector2d;
+  add_grid(s, P2(0, 0), P2(1 - c, 0), P2(1 - c, 0.4), P2(0, 0.4), cells(1 - c, step), cells(0.4, step));
+  add_grid(s, P2(1 - c, 0), P2(1, 0), P2(1, 0.4 - c), P2(1 - c, 0.4), cells(c, step), cells(0.4, step));
+  return extrude(s, 0.6, cells(0.6, step), "chamfered_box");
+}
+
+/// A cylinder of radius 0.3 and height 0.5 on the xy plane whose bottom edge is a fillet of radius 0.1 (smooth:
+/// no crease) and whose top rim is sharp (90 degrees). The flat disks are a square grid mapped onto the disk
+/// (elliptical grid mapping), the side a surface of revolution through the disks' rim points.
+SurfaceMesh make_filleted_cylinder(int res) {
+  const double R = 0.3, H = 0.5, f = 0.1;
+  const int n = std::max(4, res / 4);  // disk grid: n x n cells, 4 n rim points
+  std::vector<Vec3> V;
+  std::vector<Eigen::Vector3i> F;
+  // rim points of the square [-1, 1]^2, counter-clockwise, and the disk grid
+  std::vector<Eigen::Vector2d> rim;
+  for (int i = 0; i < n; ++i) rim.emplace_back(-1 + 2.0 * i / n, -1);
+  for (int i = 0; i < n; ++i) rim.emplace_back(1, -1 + 2.0 * i / n);
+  for (int i = 0; i < n; ++i) rim.emplace_back(1 - 2.0 * i / n, 1);
+  for (int i = 0; i < n; ++i) rim.emplace_back(-1, 1 - 2.0 * i / n);
+  auto disk = [](const Eigen::Vector2d& p) {
+    return Eigen::Vector2d(p[0] * std::sqrt(1 - p[1] * p[1] / 2), p[1] * std::sqrt(1 - p[0] * p[0] / 2));
+  };
+  const int m = int(rim.size());
+  // profile (radius, height) from the bottom disk's rim round the fillet up to the top rim
+  std::vector<Eigen::Vector2d> profile;
+  const int arc = std::max(4, res / 8);
+  for (int k = 0; k <= arc; ++k) {
+    const double t = 0.5 * kPi * k / arc;
+    profile.emplace_back(R - f + f * std::sin(t), f - f * std::cos(t));
+  }
+  const int up = cells(H - f, 2 * kPi * R / m);
+  for (int k = 1; k <= up; ++k) profile.emplace_back(R, f + (H - f) * k / up);
+  // side: ring k of the profile at the rim points' angles
+  for (const auto& pr : profile)
+    for (const auto& r : rim) {
+      const Eigen::Vector2d d = disk(r);
+      V.emplace_back(pr[0] * d[0], pr[0] * d[1], pr[1]);
+    }
+  auto ring = [&](size_t k, int j) { return int(k) * m + (j % m); };
+  for (size_t k = 0; k + 1 < profile.size(); ++k)
+    for (int j = 0; j < m; ++j) add_quad(V, F, ring(k, j), ring(k, j + 1), ring(k + 1, j + 1), ring(k + 1, j));
+  // disks: grid points, their rim taken from the side's first and last rings
+  for (int cap = 0; cap < 2; ++cap) {
+    const double radius = cap ? R : R - f, z = cap ? H : 0.0;
+    const size_t k = cap ? profile.size() - 1 : 0;
+    std::map<std::pair<int, int>, int> id;
+    for (int j = 0; j < m; ++j) {  // rim point j of the square is grid point (i, l)
+      const Eigen::Vector2d& r = rim[size_t(j)];
+      id[{int(std::lround((r[0] + 1) * n / 2)), int(std::lround((r[1] + 1) * n / 2))}] = ring(k, j);
+    }
+    auto vid = [&](int i, int l) {
+      auto it = id.find({i, l});
+      if (it != id.end()) return it->second;
+      const Eigen::Vector2d d = disk(Eigen::Vector2d(-1 + 2.0 * i / n, -1 + 2.0 * l / n));
+      V.emplace_back(radius * d[0], radius * d[1], z);
+      return id[{i, l}] = int(V.size()) - 1;
+    };
+    for (int l = 0; l < n; ++l)
+      for (int i = 0; i < n; ++i)
+        if (cap)
+          add_quad(V, F, vid(i, l), vid(i + 1, l), vid(i + 1, l + 1), vid(i, l + 1));
+        else
+          add_quad(V, F, vid(i, l), vid(i, l + 1), vid(i + 1, l + 1), vid(i + 1, l));
+  }
+  return pack(V, std::move(F), "filleted_cylinder");
+}
+
 }  // namespace
 
 std::vector<std::string> shape_names() {
-  return {"sphere", "torus", "bumpy_torus", "rod_with_holes", "l_block", "bent_pipe", "fandisk_like", "box"};
+  return {"sphere",       "torus", "bumpy_torus",   "rod_with_holes", "l_block",          "bent_pipe",
+          "fandisk_like", "box",   "sharp_l_block", "chamfered_box",  "filleted_cylinder"};
 }
 
 SurfaceMesh make_shape(const ShapeParams& p) {
@@ -377,6 +523,9 @@ SurfaceMesh make_shape(const ShapeParams& p) {
   if (p.name == "bent_pipe") return make_bent_pipe(r);
   if (p.name == "fandisk_like") return make_fandisk_like(r);
   if (p.name == "box") return make_box(r);
+  if (p.name == "sharp_l_block") return make_sharp_l_block(r);
+  if (p.name == "chamfered_box") return make_chamfered_box(r);
+  if (p.name == "filleted_cylinder") return make_filleted_cylinder(r);
   std::string list;
   for (auto& n : shape_names()) list += (list.empty() ? "" : ", ") + n;
   throw InvalidInput("shapes: unknown shape `" + p.name + "`; valid shapes: " + list);
