@@ -215,26 +215,63 @@ Eigen::VectorXi surface_patches(const SurfaceMesh& surface, double angle_deg, in
   return patch;
 }
 
-SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double min_length, double scale) {
-  const auto& V = surface.V;
-  const Eigen::Index nv = V.rows();
-  std::vector<std::vector<int>> adj(static_cast<size_t>(nv));  // sharp-edge neighbours
-  for (const auto& [a, b] : sharp_edges(surface, angle_deg, scale)) {
-    adj[size_t(a)].push_back(b);
-    adj[size_t(b)].push_back(a);
+namespace {
+
+/// A crease line at a scale is a part's edge, not a scan's faceting: a smooth curve (at points 2 scale apart
+/// it turns by less than kEdgeTurn degrees on average) with a steady dihedral angle (standard deviation below
+/// kEdgeSpread degrees), at least kEdgeLength x scale long (the stages take half a hex edge: three hex edges)
+/// or running between two corners. A scan's creases zig-zag between its facets, short, at angles that come
+/// and go.
+constexpr double kEdgeLength = 6.0, kEdgeTurn = 20.0, kEdgeSpread = 10.0;
+
+/// The shape of a crease line (kEdgeLength aside): a smooth curve at the scale (its points 2 scale apart
+/// along it: a level set's staircase of voxels turns at every vertex, not at the scale) with a steady
+/// dihedral angle.
+bool part_edge_shape(const std::vector<int>& verts, const std::vector<Vec3>& line,
+                     const std::unordered_map<long long, double>& dihedral, long long nv, double scale) {
+  std::vector<Vec3> at{line.front()};  // points 2 scale apart along the line, and its end
+  double run = 0;
+  for (size_t k = 1; k < line.size(); ++k) {
+    run += (line[k] - line[k - 1]).norm();
+    if (run >= 2 * scale || k + 1 == line.size()) at.push_back(line[k]), run = 0;
   }
+  double turn = 0;
+  int turns = 0;
+  for (size_t k = 1; k + 1 < at.size(); ++k) {
+    const Vec3 a = at[k] - at[k - 1], b = at[k + 1] - at[k];
+    if (a.norm() > 0 && b.norm() > 0)
+      turn += std::acos(std::clamp(a.dot(b) / (a.norm() * b.norm()), -1.0, 1.0)) * 180.0 / M_PI, ++turns;
+  }
+  if (turns > 0 && turn / turns > kEdgeTurn) return false;
+  double sum = 0, sq = 0;
+  for (size_t k = 1; k < verts.size(); ++k) {
+    const auto it = dihedral.find((long long)std::min(verts[k - 1], verts[k]) * nv + std::max(verts[k - 1], verts[k]));
+    const double d = it == dihedral.end() ? 0.0 : it->second;
+    sum += d, sq += d * d;
+  }
+  const double n = double(verts.size() - 1), mean = sum / n;
+  return std::sqrt(std::max(sq / n - mean * mean, 0.0)) <= kEdgeSpread;
+}
+
+}  // namespace
+
+namespace {
+
+/// A chain of sharp edges between nodes (vertices with 1 or >= 3 sharp edges), or a closed loop.
+struct Chain {
+  std::vector<int> verts;
+  bool closed = false;
+};
+
+/// The chains of the sharp-edge graph `adj` (per vertex its sharp-edge neighbours).
+std::vector<Chain> sharp_chains(const std::vector<std::vector<int>>& adj) {
+  const long long nv = (long long)adj.size();
   auto is_node = [&](int v) { return adj[size_t(v)].size() != 2; };
-  SurfaceCreases out;
-  // visited sharp edges, keyed by (low, high)
   auto key = [&](int a, int b) { return (long long)std::min(a, b) * nv + std::max(a, b); };
-  std::unordered_map<long long, char> visited;
-  struct RawLine {
-    std::vector<int> verts;
-    bool closed;
-  };
-  std::vector<RawLine> raw;
+  std::unordered_map<long long, char> visited;  // sharp edges, keyed by (low, high)
+  std::vector<Chain> out;
   auto walk = [&](int start, int next) {
-    RawLine r{{start}, false};
+    Chain r{{start}, false};
     int prev = start, cur = next;
     visited[key(prev, cur)] = 1;
     while (true) {
@@ -251,15 +288,54 @@ SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double
       visited[key(cur, nxt)] = 1;
       prev = cur, cur = nxt;
     }
-    raw.push_back(std::move(r));
+    out.push_back(std::move(r));
   };
-  for (Eigen::Index v = 0; v < nv; ++v)
-    if (!adj[size_t(v)].empty() && is_node(int(v)))
+  for (int v = 0; v < int(nv); ++v)
+    if (!adj[size_t(v)].empty() && is_node(v))
       for (int w : adj[size_t(v)])
-        if (!visited.count(key(int(v), w))) walk(int(v), w);
-  for (Eigen::Index v = 0; v < nv; ++v)  // what is left are loops of degree-2 vertices
+        if (!visited.count(key(v, w))) walk(v, w);
+  for (int v = 0; v < int(nv); ++v)  // what is left are loops of degree-2 vertices
     for (int w : adj[size_t(v)])
-      if (!visited.count(key(int(v), w))) walk(int(v), w);
+      if (!visited.count(key(v, w))) walk(v, w);
+  return out;
+}
+
+}  // namespace
+
+SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double min_length, double scale) {
+  const auto& V = surface.V;
+  const auto& F = surface.F;
+  const Eigen::Index nv = V.rows();
+  auto key = [&](int a, int b) { return (long long)std::min(a, b) * nv + std::max(a, b); };
+  const std::vector<ManifoldEdge> edges = manifold_edges(surface, angle_deg);
+  std::vector<std::vector<int>> adj(static_cast<size_t>(nv));  // sharp-edge neighbours
+  for (const ManifoldEdge& e : edges)
+    if (e.sharp) adj[size_t(e.a)].push_back(e.b), adj[size_t(e.b)].push_back(e.a);
+  if (scale > 0) {
+    // The edges sharp at the scale, on the sharp edges' chains that are a part's edges: the chains are judged
+    // whole (the scale test drops single edges along a level set's staircase, whose pieces would be short)
+    std::unordered_map<long long, double> dihedral;  // of each sharp edge, degrees
+    auto normal = [&](int f) {
+      return Vec3((V.row(F(f, 1)) - V.row(F(f, 0))).cross(V.row(F(f, 2)) - V.row(F(f, 0))).transpose().normalized());
+    };
+    for (const ManifoldEdge& e : edges)
+      if (e.sharp)
+        dihedral[key(e.a, e.b)] = std::acos(std::clamp(normal(e.f0).dot(normal(e.f1)), -1.0, 1.0)) * 180.0 / M_PI;
+    std::unordered_map<long long, char> part;  // sharp edges on chains that are a part's edges
+    for (const Chain& c : sharp_chains(adj)) {
+      std::vector<Vec3> line;
+      for (int v : c.verts) line.push_back(V.row(v).transpose());
+      const bool between_corners =
+          !c.closed && adj[size_t(c.verts.front())].size() >= 3 && adj[size_t(c.verts.back())].size() >= 3;
+      if (part_edge_shape(c.verts, line, dihedral, nv, scale) &&
+          (line_length(line) >= kEdgeLength * scale || between_corners))
+        for (size_t k = 1; k < c.verts.size(); ++k) part[key(c.verts[k - 1], c.verts[k])] = 1;
+    }
+    adj.assign(static_cast<size_t>(nv), {});
+    for (const ManifoldEdge& e : manifold_edges(surface, angle_deg, scale))
+      if (e.sharp && part.count(key(e.a, e.b))) adj[size_t(e.a)].push_back(e.b), adj[size_t(e.b)].push_back(e.a);
+  }
+  SurfaceCreases out;
   // a corner (>= 3 crease edges) enters out.corners when a kept line first ends at it
   std::vector<int> corner_index(static_cast<size_t>(nv), -1);
   auto corner_id = [&](int v) {
@@ -270,15 +346,25 @@ SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double
     }
     return corner_index[size_t(v)];
   };
-  for (const auto& r : raw) {
+  for (const Chain& r : sharp_chains(adj)) {
     std::vector<Vec3> line;
     for (int v : r.verts) line.push_back(V.row(v).transpose());
     if (line.size() < 2 || line_length(line) < min_length) continue;
     out.lines.push_back(std::move(line));
+    out.vertices.push_back(r.verts);
     out.closed.push_back(r.closed);
     out.start_corner.push_back(r.closed ? -1 : corner_id(r.verts.front()));
     out.end_corner.push_back(r.closed ? -1 : corner_id(r.verts.back()));
   }
+  return out;
+}
+
+std::vector<std::array<int, 2>> crease_edges(const SurfaceCreases& creases) {
+  std::vector<std::array<int, 2>> out;
+  for (const auto& l : creases.vertices)
+    for (size_t k = 1; k < l.size(); ++k) out.push_back({std::min(l[k - 1], l[k]), std::max(l[k - 1], l[k])});
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
 }
 
@@ -489,6 +575,90 @@ class CreaseSnapper {
 CreaseSnap snap_to_creases(const RowMatrixX3d& V, const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>& Q,
                            const SurfaceCreases& creases, double reach) {
   return CreaseSnapper(V, Q, creases, reach).run();
+}
+
+namespace {
+/// creases_at_vertices frees a vertex whose boundary quad's corner there is wider than 150 degrees, or wider than
+/// 120 degrees with both its edges on the vertex's crease line.
+const double kFlatCornerCos = std::cos(150.0 * M_PI / 180.0);
+const double kWideCornerCos = std::cos(120.0 * M_PI / 180.0);
+}  // namespace
+
+CreaseSnap creases_at_vertices(const RowMatrixX3d& V, const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>& Q,
+                               const SurfaceCreases& creases, double tol) {
+  CreaseSnap out;
+  out.line.assign(size_t(V.rows()), -1);
+  out.corner.assign(size_t(V.rows()), -1);
+  std::vector<char> on_boundary(size_t(V.rows()), 0);
+  for (Eigen::Index q = 0; q < Q.rows(); ++q)
+    for (int k = 0; k < 4; ++k) on_boundary[size_t(Q(q, k))] = 1;
+  std::vector<Eigen::AlignedBox3d> boxes(creases.lines.size());
+  for (size_t l = 0; l < creases.lines.size(); ++l) {
+    for (const Vec3& p : creases.lines[l]) boxes[l].extend(p);
+    boxes[l].min().array() -= tol;
+    boxes[l].max().array() += tol;
+  }
+  std::vector<char> used(creases.lines.size(), 0);
+  for (Eigen::Index v = 0; v < V.rows(); ++v) {
+    if (!on_boundary[size_t(v)]) continue;
+    const Vec3 x = V.row(v).transpose();
+    for (size_t c = 0; c < creases.corners.size() && out.corner[size_t(v)] < 0; ++c)
+      if ((creases.corners[c] - x).norm() <= tol) out.corner[size_t(v)] = int(c);
+    if (out.corner[size_t(v)] >= 0) continue;
+    double best = tol;
+    for (size_t l = 0; l < creases.lines.size(); ++l) {
+      if (!boxes[l].contains(x)) continue;
+      const double d = (closest_on_line(creases.lines[l], x) - x).norm();
+      if (d <= best) best = d, out.line[size_t(v)] = int(l);
+    }
+    if (out.line[size_t(v)] >= 0) used[size_t(out.line[size_t(v)])] = 1;
+  }
+  // a boundary quad with a lattice corner where the crease runs on (a PolyCube corner on a smooth part of it):
+  // nearly flat at the vertex, or wide with both its edges there on the vertex's line (sliding along the line
+  // would flatten it); the vertex must leave the crease to open that corner
+  const std::vector<int> line0 = out.line;
+  for (Eigen::Index q = 0; q < Q.rows(); ++q)
+    for (int k = 0; k < 4; ++k) {
+      const int v = Q(q, k), u = Q(q, (k + 1) % 4), w = Q(q, (k + 3) % 4);
+      if (out.line[size_t(v)] < 0 && out.corner[size_t(v)] < 0) continue;
+      const Vec3 x = V.row(v).transpose(), a = V.row(u).transpose() - x, b = V.row(w).transpose() - x;
+      if (!(a.norm() > 0 && b.norm() > 0)) continue;
+      const double c = a.dot(b) / (a.norm() * b.norm());
+      const bool along =
+          line0[size_t(v)] >= 0 && line0[size_t(u)] == line0[size_t(v)] && line0[size_t(w)] == line0[size_t(v)];
+      if (c < kFlatCornerCos || (along && c < kWideCornerCos)) out.line[size_t(v)] = out.corner[size_t(v)] = -1;
+    }
+  // a vertex where the lattice crosses a crease (no boundary edge of it along the crease) does not follow it:
+  // kept on the line it would hold its quads across it
+  std::vector<std::vector<int>> nbrs(size_t(V.rows()));
+  for (Eigen::Index q = 0; q < Q.rows(); ++q)
+    for (int k = 0; k < 4; ++k)
+      nbrs[size_t(Q(q, k))].push_back(Q(q, (k + 1) % 4)), nbrs[size_t(Q(q, (k + 1) % 4))].push_back(Q(q, k));
+  for (int pass = 0; pass < 2; ++pass) {
+    const std::vector<int> line1 = out.line, corner1 = out.corner;
+    for (Eigen::Index v = 0; v < V.rows(); ++v) {
+      if (line1[size_t(v)] < 0 && corner1[size_t(v)] < 0) continue;
+      bool along = false;
+      for (int w : nbrs[size_t(v)]) {
+        const int l = line1[size_t(v)], m = line1[size_t(w)];
+        if (l >= 0)
+          along = along || m == l ||
+                  (corner1[size_t(w)] >= 0 && (creases.start_corner[size_t(l)] == corner1[size_t(w)] ||
+                                               creases.end_corner[size_t(l)] == corner1[size_t(w)]));
+        else if (m >= 0)
+          along = along || creases.start_corner[size_t(m)] == corner1[size_t(v)] ||
+                  creases.end_corner[size_t(m)] == corner1[size_t(v)];
+      }
+      if (!along) out.line[size_t(v)] = out.corner[size_t(v)] = -1;
+    }
+  }
+  std::fill(used.begin(), used.end(), 0);
+  for (Eigen::Index v = 0; v < V.rows(); ++v)
+    if (out.line[size_t(v)] >= 0) used[size_t(out.line[size_t(v)])] = 1;
+  for (Eigen::Index v = 0; v < V.rows(); ++v) out.vertices += out.line[size_t(v)] >= 0 || out.corner[size_t(v)] >= 0;
+  for (char u : used) out.lines_snapped += u;
+  out.lines_skipped = int(creases.lines.size()) - out.lines_snapped;
+  return out;
 }
 
 }  // namespace polyhex

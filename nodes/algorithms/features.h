@@ -25,7 +25,11 @@ struct SurfaceCreases {
   std::vector<char> closed;                         ///< per line: a closed loop
   std::vector<int> start_corner, end_corner;        ///< per line: index into corners of its ends, -1 if none
   std::vector<Eigen::Vector3d> corners;             ///< crease vertices with >= 3 crease edges
+  std::vector<std::vector<int>> vertices;           ///< per line: its surface vertex ids (as `lines`)
 };
+
+/// The surface edges of the crease lines, (low, high) vertex pairs, sorted.
+std::vector<std::array<int, 2>> crease_edges(const SurfaceCreases& creases);
 
 /// The dihedral angle (degrees) above which the stages that follow sharp edges take an edge as one by default
 /// (boundary groups, the optimizer's crease candidate, the quality node's feature fidelity).
@@ -56,7 +60,10 @@ Eigen::VectorXi surface_patches(const SurfaceMesh& surface, double angle_deg, in
 /// Finds the creases of a closed surface.
 /// \param angle_deg  a surface edge is sharp when its triangles' normals differ by more than this, (0, 180)
 /// \param min_length  lines shorter than this are dropped (noise), >= 0
-/// \param scale  > 0: the edges must be sharp at this scale as well (sharp_edges), >= 0
+/// \param scale  > 0: the edges must be sharp at this scale as well (sharp_edges), and a line must be a part's
+///               edge, not a scan's faceting: a smooth curve (at points 2 scale apart along it, it turns by
+///               less than 20 degrees on average) with a steady dihedral angle (standard deviation below 10 degrees),
+///               at least 6 scale long or running between two corners (a box's short edge), >= 0
 /// \throw InvalidInput when a triangle index is out of range
 SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double min_length, double scale = 0);
 
@@ -87,5 +94,16 @@ struct CreaseSnap {
 /// Never throws beyond std::bad_alloc: a line without an acceptable path is counted in lines_skipped.
 CreaseSnap snap_to_creases(const RowMatrixX3d& V, const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>& Q,
                            const SurfaceCreases& creases, double reach);
+
+/// The boundary vertices of a hex mesh that already lie on the creases: within `tol` of a crease corner (it stays
+/// there) or of a crease line (it moves along it). The lattice puts a hex vertex on a crease wherever the
+/// PolyCube structure has a chart boundary or corner on it. A vertex where one of its boundary quads has a
+/// lattice corner on a crease that runs on (the corner wider than 150 degrees, or than 120 with both of the
+/// quad's edges there on the vertex's line) stays free: it must leave the crease to open that corner. So does a
+/// vertex with no boundary edge along its line (to a vertex on it or at one of its corners): there the lattice
+/// crosses the crease, and sliding along it would hold the vertex's quads across it.
+/// \param V  hex mesh vertices   \param Q  its boundary quads   \param tol  >= 0
+CreaseSnap creases_at_vertices(const RowMatrixX3d& V, const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>& Q,
+                               const SurfaceCreases& creases, double tol);
 
 }  // namespace polyhex

@@ -172,3 +172,71 @@ TEST_CASE("surface_patches: a box has six patches bounded by its sharp edges, on
   surface_patches(box, 95, &n);
   CHECK(n == 1);
 }
+
+TEST_CASE("creases_at_vertices: a box lattice's edge vertices follow the 12 lines, its corners stay", "[features]") {
+  const HexMesh g = test::grid_hex_mesh(4, 3, 2);
+  const SurfaceMesh s = test::boundary_surface(g);
+  const SurfaceCreases c = find_creases(s, 40, 1.5, 0.5);
+  REQUIRE(c.lines.size() == 12);
+  const auto Q = hex_boundary_quads(g);
+  const CreaseSnap snap = creases_at_vertices(g.V, Q, c, 0.05);
+  long on_lines = 0, at_corners = 0;
+  for (Eigen::Index v = 0; v < g.V.rows(); ++v) {
+    const Eigen::Vector3d x = g.V.row(v).transpose();
+    const int at = int(x[0] == 0 || x[0] == 4) + int(x[1] == 0 || x[1] == 3) + int(x[2] == 0 || x[2] == 2);
+    CHECK((snap.corner[size_t(v)] >= 0) == (at == 3));
+    CHECK((snap.line[size_t(v)] >= 0) == (at == 2));
+    if (snap.line[size_t(v)] >= 0) {
+      ++on_lines;
+      CHECK((closest_on_line(c.lines[size_t(snap.line[size_t(v)])], x) - x).norm() < 1e-12);
+    }
+    if (snap.corner[size_t(v)] >= 0) {
+      ++at_corners;
+      CHECK((c.corners[size_t(snap.corner[size_t(v)])] - x).norm() < 1e-12);
+    }
+  }
+  CHECK(on_lines == 4 * 3 + 4 * 2 + 4 * 1);
+  CHECK(at_corners == 8);
+  CHECK(snap.vertices == on_lines + at_corners);
+  CHECK(snap.lines_snapped == 12);
+}
+
+TEST_CASE("creases_at_vertices: a lattice corner where the crease runs straight on leaves the vertex free",
+          "[features]") {
+  // three quads along a straight crease y = z = 0: the middle one's corner at the origin is 180 degrees (a
+  // lattice corner where the crease runs on); the outer ones have an edge along the crease each
+  RowMatrixX3d V(10, 3);
+  V << -2, 0, 0, -1, 0, 0, -1, 1, 0, -2, 1, 0,  // 0-3: left quad, edge 0-1 on the crease
+      0, 0, 0, 1, 0, 0, 0, 1, 0,                // 4: the flat corner, 5, 6
+      2, 0, 0, 2, 1, 0, 1, 1, 0;                // 7-9: right quad, edge 5-7 on the crease
+  Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> Q(3, 4);
+  Q << 0, 1, 2, 3, 1, 4, 5, 6, 5, 7, 8, 9;
+  SurfaceCreases c;
+  c.lines = {{Eigen::Vector3d(-3, 0, 0), Eigen::Vector3d(3, 0, 0)}};
+  c.closed = {0};
+  c.start_corner = c.end_corner = {-1};
+  const CreaseSnap snap = creases_at_vertices(V, Q, c, 0.05);
+  for (int v : {0, 1, 5, 7}) CHECK(snap.line[size_t(v)] == 0);
+  CHECK(snap.line[4] == -1);                                        // the flat corner
+  for (int v : {2, 3, 6, 8, 9}) CHECK(snap.line[size_t(v)] == -1);  // off the crease
+  CHECK(snap.vertices == 4);
+}
+
+TEST_CASE("creases_at_vertices: a vertex where the lattice crosses a crease stays free", "[features]") {
+  // a quad strip across the crease x = 0 (in the plane z = 0): vertices 1 and 4 lie on the crease, but their
+  // boundary edges cross it (to x = -1 and x = 1), none runs along it
+  RowMatrixX3d V(6, 3);
+  V << -1, 0, 0, 0, 0, 0, 1, 0, 0, -1, 1, 0, 0, 1, 0, 1, 1, 0;
+  Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> Q(2, 4);
+  Q << 0, 1, 4, 3, 1, 2, 5, 4;
+  SurfaceCreases c;
+  c.lines = {{Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(0, 0.5, 0)}};  // through vertex 1 only
+  c.closed = {0};
+  c.start_corner = c.end_corner = {-1};
+  CHECK(creases_at_vertices(V, Q, c, 0.05).vertices == 0);
+  c.lines = {{Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(0, 2, 0)}};  // through 1 and 4: edge 1-4 runs along it
+  const CreaseSnap snap = creases_at_vertices(V, Q, c, 0.05);
+  CHECK(snap.line[1] == 0);
+  CHECK(snap.line[4] == 0);
+  CHECK(snap.vertices == 2);
+}
