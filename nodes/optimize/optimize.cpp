@@ -55,9 +55,24 @@ double min_corner_det(const std::array<Vec3, 8>& p, double scale) {
   return m;
 }
 
+/// A crease vertex freed under a padding layer (free_padded_creases) stays within this many hex edges of its
+/// crease line, twice as many of its corner (where three layer hexes share one inner copy: 0.58 kept there).
+constexpr double kLeash = 0.25;
+/// ... and is freed only where its boundary quads turn by more than 75 degrees: kept on a crease that turns by
+/// t, the layer's hexes there are sheared to a scaled Jacobian of about cos(t / 2), 0.79 at 75 degrees.
+const double kPaddedSharpCos = std::cos(75.0 * M_PI / 180.0);
+/// A boundary vertex within this many hex edges of a crease lies on it (creases_at_vertices): the lattice
+/// puts vertices on a crease exactly, or within a layer's curvature where a layer ends beside it.
+constexpr double kOnCrease = 0.05;
+
 class Optimizer {
  public:
-  Optimizer(const HexMesh& mesh, const SurfaceMesh& surface, const OptimizeParams& p, OptimizeStats& st)
+  /// Which boundary vertices stay on the surface's creases: none, those the lattice put on them
+  /// (creases_at_vertices), or paths of boundary edges nearest to them (snap_to_creases, the crease candidate).
+  enum class Creases { none, at_vertices, paths };
+
+  Optimizer(const HexMesh& mesh, const SurfaceMesh& surface, const OptimizeParams& p, Creases creases,
+            OptimizeStats& st)
       : p_(p), st_(st), V_(mesh.V), H_(mesh.H), tree_(surface.V, surface.F), t0_(Clock::now()) {
     normals_.resize(size_t(surface.F.rows()));
     for (Eigen::Index f = 0; f < surface.F.rows(); ++f) {
@@ -76,10 +91,16 @@ class Optimizer {
     for (Eigen::Index v = 0; v < V_.rows(); ++v)
       if (boundary_[size_t(v)]) V_.row(v) = tree_.closest(V_.row(v).transpose()).point.transpose();
     released_.assign(size_t(V_.rows()), 0);
-    if (p_.feature_angle > 0 && p_.move_boundary && Q.rows() > 0) {
+    if (creases != Creases::none && p_.feature_angle > 0 && p_.move_boundary && Q.rows() > 0) {
       const double h = median_boundary_edge(V_, Q);  // the hex edge length
-      creases_ = find_creases(surface, p_.feature_angle, 1.5 * h);
-      snap_ = snap_to_creases(V_, Q, creases_, h);
+      if (creases == Creases::at_vertices) {
+        creases_ = find_creases(surface, p_.feature_angle, 1.5 * h, 0.5 * h);
+        snap_ = creases_at_vertices(V_, Q, creases_, kOnCrease * h);
+        free_padded_creases(Q, h);
+      } else {
+        creases_ = find_creases(surface, p_.feature_angle, 1.5 * h);
+        snap_ = snap_to_creases(V_, Q, creases_, h);
+      }
       st_.crease_lines = int(creases_.lines.size());
       st_.crease_lines_snapped = snap_.lines_snapped;
       st_.crease_vertices = snap_.vertices;
@@ -363,7 +384,48 @@ class Optimizer {
       if (snap_.corner[size_t(v)] >= 0) return creases_.corners[size_t(snap_.corner[size_t(v)])];
       return closest_on_line(creases_.lines[size_t(snap_.line[size_t(v)])], x);
     }
-    return tree_.closest(x).point;
+    const Vec3 y = tree_.closest(x).point;
+    if (leash_line_.empty() || (leash_line_[size_t(v)] < 0 && leash_corner_[size_t(v)] < 0)) return y;
+    // a freed crease vertex stays within leash_ of its line or corner
+    const Vec3 anchor = leash_corner_[size_t(v)] >= 0
+                            ? creases_.corners[size_t(leash_corner_[size_t(v)])]
+                            : closest_on_line(creases_.lines[size_t(leash_line_[size_t(v)])], y);
+    const double d = (y - anchor).norm(), leash = leash_corner_[size_t(v)] >= 0 ? 2 * leash_ : leash_;
+    return d <= leash ? y : tree_.closest(anchor + (leash / d) * (y - anchor)).point;
+  }
+
+  /// A crease vertex whose every hex has one boundary face at it lies under a padding layer on both sides of
+  /// the crease: the layer's hexes share one inner copy there, so kept on the crease they stay sheared at 45
+  /// degrees (scaled Jacobian 0.71 along the crease, 0.58 at a corner). Where the crease turns by more than 75
+  /// degrees such vertices may round it a little: they move on the surface within kLeash hex edges of it.
+  /// Where the layer ends on the crease (pad.h), the hexes are boxes and the vertices stay on it.
+  void free_padded_creases(const BoundaryQuads& Q, double h) {
+    // per vertex: its boundary quads, and the least cosine between two of their normals (how sharp it is)
+    std::vector<int> quads(size_t(V_.rows()), 0);
+    std::vector<std::vector<Vec3>> normals(size_t(V_.rows()));
+    for (Eigen::Index q = 0; q < Q.rows(); ++q) {
+      const Vec3 n = (V_.row(Q(q, 2)) - V_.row(Q(q, 0))).cross(V_.row(Q(q, 3)) - V_.row(Q(q, 1))).transpose();
+      for (int k = 0; k < 4; ++k) {
+        ++quads[size_t(Q(q, k))];
+        if (n.norm() > 0) normals[size_t(Q(q, k))].push_back(n.normalized());
+      }
+    }
+    auto sharp = [&](size_t v) {
+      for (size_t i = 0; i < normals[v].size(); ++i)
+        for (size_t j = i + 1; j < normals[v].size(); ++j)
+          if (normals[v][i].dot(normals[v][j]) < kPaddedSharpCos) return true;
+      return false;
+    };
+    leash_ = kLeash * h;
+    leash_line_.assign(size_t(V_.rows()), -1);
+    leash_corner_.assign(size_t(V_.rows()), -1);
+    for (size_t v = 0; v < size_t(V_.rows()); ++v)
+      if ((snap_.line[v] >= 0 || snap_.corner[v] >= 0) && quads[v] == start_[v + 1] - start_[v] && sharp(v)) {
+        leash_line_[v] = snap_.line[v];
+        leash_corner_[v] = snap_.corner[v];
+        snap_.line[v] = snap_.corner[v] = -1;
+        --snap_.vertices;
+      }
   }
 
   /// Moves vertex v to decrease f; `ok()` judges the trial position (V_ holds it). Returns true if moved.
@@ -389,8 +451,7 @@ class Optimizer {
       if (snap_.line[size_t(v)] >= 0) closest_on_line(creases_.lines[size_t(snap_.line[size_t(v)])], x0, &t);
       g = g.dot(t) * t;
     } else if (on_surface(v)) {
-      const auto hit = tree_.closest(x0);
-      normal = normals_[size_t(hit.triangle)];
+      normal = normals_[size_t(tree_.closest(x0).triangle)];
       g -= g.dot(normal) * normal;
     }
     auto trial = [&](const Vec3& x) {
@@ -838,9 +899,12 @@ class Optimizer {
   std::vector<double> scale_;
   std::vector<std::vector<int>> classes_;
   std::vector<char> boundary_;
-  std::vector<char> released_;  ///< boundary vertices allowed off the surface (last-resort untangling)
-  SurfaceCreases creases_;      ///< the surface's sharp creases (feature_angle > 0)
-  CreaseSnap snap_;             ///< boundary vertices on them (empty vectors when off)
+  std::vector<char> released_;                  ///< boundary vertices allowed off the surface (last-resort untangling)
+  SurfaceCreases creases_;                      ///< the surface's sharp creases (feature_angle > 0)
+  CreaseSnap snap_;                             ///< boundary vertices on them (empty vectors when off)
+  std::vector<int> leash_line_, leash_corner_;  ///< per vertex: the crease line / corner a freed crease vertex
+                                                ///< stays near, -1 none (free_padded_creases; empty when off)
+  double leash_ = 0;                            ///< how near: kLeash hex edges
   std::vector<Vec3> normals_;
 };
 
@@ -905,8 +969,9 @@ HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback,
     if (progress) progress(fraction, what);
   };
   // Every candidate goes through (a)-(b''); the shape improvement (c), which never lowers the minimum nor
-  // un-inverts, runs on the best one only. The first is the mesh with its boundary on the surface; if its
-  // result is poor, the same mesh with crease lines (feature_angle), then the fallback mesh.
+  // un-inverts, runs on the best one only. The first is the mesh with its boundary on the surface, the
+  // vertices the lattice put on the creases kept there (keep_creases); if its result is poor, the same mesh
+  // with paths of boundary edges put on the crease lines (feature_angle), then the fallback mesh.
   const auto t0 = Clock::now();
   check_hex_mesh(mesh);
   struct Candidate {
@@ -916,13 +981,13 @@ HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback,
     double seconds = 0;  // its own time (its shape pass included if kept)
   };
   std::deque<Candidate> cands;
-  auto start = [&](const HexMesh& m, const OptimizeParams& q) -> Candidate& {
+  auto start = [&](const HexMesh& m, Optimizer::Creases creases) -> Candidate& {
     const auto tc = Clock::now();
     check_hex_mesh(m);
     Candidate& c = cands.emplace_back();
     c.mesh = &m;
     summarise(m, c.st.sj_min_before, c.st.sj_avg_before, c.st.inverted_before);
-    c.opt = std::make_unique<Optimizer>(m, surface, q, c.st);
+    c.opt = std::make_unique<Optimizer>(m, surface, p, creases, c.st);
     c.seconds = seconds_since(tc);
     return c;
   };
@@ -933,16 +998,15 @@ HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback,
     c.st.sj_min_after = c.opt->min_now();
     c.seconds += seconds_since(tc);
   };
-  OptimizeParams plain = p;
-  plain.feature_angle = 0;
+  const auto first = p.keep_creases ? Optimizer::Creases::at_vertices : Optimizer::Creases::none;
   report(0, "untangling, max-min");
-  improve(start(mesh, plain));
+  improve(start(mesh, first));
   const bool poor = cands[0].st.inverted_after > 0 || cands[0].st.sj_min_after < p.fallback_below_sj;
   Candidate* creases = nullptr;
   Candidate* fb = nullptr;
   if (poor && p.feature_angle > 0 && p.move_boundary) {
     report(0.2, "candidate with crease lines");
-    creases = &start(mesh, p);
+    creases = &start(mesh, Optimizer::Creases::paths);
     if (creases->st.crease_lines_snapped > 0)
       improve(*creases);
     else
@@ -950,7 +1014,7 @@ HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback,
   }
   if (poor && fallback) {
     report(0.27, "fallback candidate");
-    improve(*(fb = &start(*fallback, plain)));
+    improve(*(fb = &start(*fallback, first)));
   }
   Candidate* best = &cands[0];
   for (Candidate& c : cands)

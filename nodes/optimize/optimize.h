@@ -51,8 +51,13 @@ struct OptimizeParams {
   bool release_boundary =
       true;  ///< last resort: boundary corners of hexes still inverted after untangling may leave the surface
   double feature_angle =
-      kFeatureAngle;  ///< if the first result is poor (fallback_below_sj), a second candidate whose boundary vertices
-                      ///< follow the surface's creases sharper than this (degrees, features.h), 0 = off, [0, 179]
+      kFeatureAngle;  ///< degrees: an edge of the surface sharper than this is a crease (features.h), 0 = no
+                      ///< crease handling; if the first result is poor (fallback_below_sj), a second candidate puts
+                      ///< paths of boundary edges on the crease lines, [0, 179]
+  bool keep_creases = true;        ///< boundary vertices the lattice put on a crease of the surface (sharper than
+                                   ///< feature_angle at half a hex edge) slide along it, those at its corners stay
+                                   ///< (features.h creases_at_vertices; under a padding layer on both sides of the
+                                   ///< crease they stay within a quarter hex edge of it instead)
   double fallback_below_sj = 0.5;  ///< with a fallback mesh: also optimize it when the first result's minimum scaled
                                    ///< Jacobian is below this, [0, 1]
 };
@@ -80,14 +85,14 @@ struct OptimizeStats {
   bool time_budget_hit = false;
   long released_vertices = 0;    ///< boundary vertices released from the surface to untangle (release_boundary)
   int crease_lines = 0;          ///< crease lines of the surface at feature_angle (at least 1.5 hex edges long)
-  int crease_lines_snapped = 0;  ///< ... with a path of boundary edges on them
-  long crease_vertices = 0;      ///< boundary vertices on a crease line or at a crease corner
+  int crease_lines_snapped = 0;  ///< ... with boundary vertices kept on them
+  long crease_vertices = 0;      ///< boundary vertices kept on a crease line or at a crease corner
   double seconds = 0;
   double untangle_seconds = 0, global_seconds = 0, maxmin_seconds = 0, element_seconds = 0, smooth_seconds = 0,
          shape_seconds = 0;  ///< per phase
 
-  /// Report names (runtime/stat_fields.h). The crease_* figures are reported from the crease candidate only
-  /// (optimize_node.cpp), where they mean something.
+  /// Report names (runtime/stat_fields.h). The crease_* figures are the kept candidate's, reported by the
+  /// binding (optimize_node.cpp).
   static constexpr auto fields() {
     using S = OptimizeStats;
     return std::make_tuple(

@@ -54,10 +54,13 @@ const bool registered = register_node(
             .add("release_boundary", &P::release_boundary,
                  "last resort: boundary corners of hexes still inverted after untangling may leave the surface")
             .add("feature_angle", &P::feature_angle,
-                 "when the first result is poor (see fallback_below_sj), the mesh is optimized again with boundary "
-                 "vertices on the "
-                 "surface's creases sharper than this many degrees, and the better result kept (0 = off)",
+                 "an edge of the surface sharper than this many degrees is a crease (0 = no crease handling); when "
+                 "the first result is poor (see fallback_below_sj), the mesh is optimized again with paths of "
+                 "boundary edges put on the crease lines, and the better result kept",
                  0.0, 179.0)
+            .add("keep_creases", &P::keep_creases,
+                 "boundary vertices the lattice put on a crease of the surface slide along it, those at its corners "
+                 "stay")
             .add(
                 "fallback_below_sj", &P::fallback_below_sj,
                 "with a fallback input: also optimize it when the first result's minimum scaled Jacobian is below this",
@@ -84,11 +87,10 @@ const bool registered = register_node(
           };
           candidate("fallback", fb.ran, fb.kept, fb.stats);
           candidate("creases", fb.creases_ran, fb.creases_kept, fb.creases_stats);
-          if (fb.creases_ran) {
-            j["crease_lines"] = fb.creases_stats.crease_lines;
-            j["crease_lines_snapped"] = fb.creases_stats.crease_lines_snapped;
-            j["crease_vertices"] = fb.creases_stats.crease_vertices;
-          }
+          // the kept candidate's creases: lines found, lines with a vertex on them, vertices kept on them
+          j["crease_lines"] = s.crease_lines;
+          j["crease_lines_snapped"] = s.crease_lines_snapped;
+          j["crease_vertices"] = s.crease_vertices;
           put_stats(s, j);
           if (s.released_vertices > 0)
             ctx.warn(std::to_string(s.released_vertices) +
@@ -101,7 +103,7 @@ const bool registered = register_node(
             ctx.warn("optimization stopped at its time budget of " + std::to_string(p.time_budget) + " s");
           return make_artefact(std::move(out));
         })
-        .with_version("14"));
+        .with_version("28"));
 
 }  // namespace
 }  // namespace polyhex
