@@ -3,6 +3,7 @@
 
 #include "nodes/algorithms/hex_quality.h"
 #include "nodes/algorithms/triangle_tree.h"
+#include "nodes/artefacts/hex_topology.h"
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
 #include "runtime/stopwatch.h"
@@ -13,6 +14,7 @@
 #include <array>
 #include <chrono>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -20,6 +22,7 @@ namespace polyhex {
 namespace {
 
 using Vec3 = Eigen::Vector3d;
+using BoundaryQuadMatrix = Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>;
 
 std::array<Vec3, 8> hex_points(const RowMatrixX3d& V, const RowMatrixX8i& H, Eigen::Index h) {
   std::array<Vec3, 8> p;
@@ -282,6 +285,359 @@ DoubletRepair remove_boundary_doublets(const HexMesh& mesh) {
   return out;
 }
 
+namespace {
+
+/// One boundary edge of the quad mesh: its vertices, its two quads (-1 if not two), the hexes it is an edge of.
+struct BoundaryEdge {
+  int a, b;
+  int q0 = -1, q1 = -1;
+  int quads = 0, hexes = 0;
+};
+
+/// The boundary edges of Q, sorted by (a, b), with their quads and the number of hexes on each.
+std::vector<BoundaryEdge> quad_edges(const HexMesh& mesh, const BoundaryQuadMatrix& Q) {
+  std::vector<BoundaryEdge> e;
+  e.reserve(size_t(Q.rows()) * 4);
+  for (Eigen::Index q = 0; q < Q.rows(); ++q)
+    for (int k = 0; k < 4; ++k) {
+      const int a = Q(q, k), b = Q(q, (k + 1) % 4);
+      e.push_back({std::min(a, b), std::max(a, b), int(q), -1, 1, 0});
+    }
+  auto less = [](const BoundaryEdge& x, const BoundaryEdge& y) { return x.a != y.a ? x.a < y.a : x.b < y.b; };
+  std::sort(e.begin(), e.end(),
+            [&](const BoundaryEdge& x, const BoundaryEdge& y) { return less(x, y) || (!less(y, x) && x.q0 < y.q0); });
+  std::vector<BoundaryEdge> out;
+  for (size_t i = 0; i < e.size();) {
+    size_t j = i;
+    while (j < e.size() && e[j].a == e[i].a && e[j].b == e[i].b) ++j;
+    BoundaryEdge m = e[i];
+    m.quads = int(j - i);
+    m.q1 = m.quads == 2 ? e[i + 1].q0 : -1;
+    if (m.quads != 2) m.q0 = -1;
+    out.push_back(m);
+    i = j;
+  }
+  for (Eigen::Index h = 0; h < mesh.H.rows(); ++h)
+    for (const auto& k : hex_topology::kEdges) {
+      const int a = mesh.H(h, k[0]), b = mesh.H(h, k[1]);
+      const BoundaryEdge key{std::min(a, b), std::max(a, b)};
+      auto it = std::lower_bound(out.begin(), out.end(), key, less);
+      if (it != out.end() && it->a == key.a && it->b == key.b) ++it->hexes;
+    }
+  return out;
+}
+
+}  // namespace
+
+namespace {
+
+/// Selective padding's view of a mesh's boundary (select_padded_quads): which quads need the layer, where the
+/// layer may end, and how the quads hang together.
+class LayerPlan {
+ public:
+  LayerPlan(const HexMesh& mesh, const BoundaryQuadMatrix& Q, double tolerance_deg)
+      : mesh_(mesh), Q_(Q), edges_(quad_edges(mesh, Q)) {
+    classify(tolerance_deg);
+    at_.resize(size_t(mesh.V.rows()));
+    for (size_t i = 0; i < edges_.size(); ++i) {
+      at_[size_t(edges_[i].a)].push_back(int(i));
+      at_[size_t(edges_[i].b)].push_back(int(i));
+    }
+    quads_at_.resize(size_t(mesh.V.rows()));
+    for (Eigen::Index q = 0; q < Q.rows(); ++q)
+      for (int k = 0; k < 4; ++k) quads_at_[size_t(Q(q, k))].push_back(int(q));
+  }
+
+  /// The quads on edges whose lattice and surface turns differ by more than the tolerance (or not manifold).
+  const std::vector<char>& seeds() const { return seed_; }
+
+  /// Grows `pad` until the layer ends only on edges where it may, and every vertex with padded and unpadded
+  /// quads has its padded ones as one fan between two such edges.
+  void close(std::vector<char>& pad) const {
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (size_t i = 0; i < edges_.size(); ++i) {
+        const BoundaryEdge& e = edges_[i];
+        if (e.quads != 2 || pad[size_t(e.q0)] == pad[size_t(e.q1)] || may_end_[i]) continue;
+        pad[size_t(e.q0)] = pad[size_t(e.q1)] = 1;
+        changed = true;
+      }
+      for (size_t v = 0; v < at_.size(); ++v) {
+        int padded = 0, ends = 0;
+        for (int q : quads_at_[v]) padded += pad[size_t(q)];
+        if (padded == 0 || padded == int(quads_at_[v].size())) continue;
+        for (int i : at_[v]) ends += border(pad, size_t(i));
+        if (ends == 2) continue;
+        for (int q : quads_at_[v]) pad[size_t(q)] = 1;
+        changed = true;
+      }
+    }
+  }
+
+  /// Of the padded quads, the parts (joined across edges where the layer may not end) that share no vertex
+  /// with an earlier part, closed again: one layer whose every end is a convex crease. Padded in turn, two
+  /// parts that meet on a convex crease each end on it, and the hexes there stay boxes instead of being
+  /// sheared by a layer round the crease (0.71; 0.58 at a corner).
+  std::vector<char> first_layer(const std::vector<char>& pad) const {
+    const size_t nq = pad.size();
+    std::vector<int> part(nq, -1);
+    std::vector<int> stack;
+    int parts = 0;
+    for (size_t q0 = 0; q0 < nq; ++q0) {
+      if (!pad[q0] || part[q0] >= 0) continue;
+      part[q0] = parts;
+      stack.assign(1, int(q0));
+      while (!stack.empty()) {
+        const int q = stack.back();
+        stack.pop_back();
+        for (int k = 0; k < 4; ++k)
+          for (int i : at_[size_t(Q_(q, k))]) {
+            const BoundaryEdge& e = edges_[size_t(i)];
+            if (may_end_[size_t(i)] || e.quads != 2 || (e.q0 != q && e.q1 != q)) continue;
+            const int r = e.q0 == q ? e.q1 : e.q0;
+            if (pad[size_t(r)] && part[size_t(r)] < 0) part[size_t(r)] = parts, stack.push_back(r);
+          }
+      }
+      ++parts;
+    }
+    std::vector<char> chosen(size_t(parts), 0), blocked(size_t(parts), 0);
+    for (int c = 0; c < parts; ++c) {  // parts in order of their lowest quad
+      if (blocked[size_t(c)]) continue;
+      chosen[size_t(c)] = 1;
+      for (size_t q = 0; q < nq; ++q) {
+        if (part[q] != c) continue;
+        for (int k = 0; k < 4; ++k)
+          for (int r : quads_at_[size_t(Q_(Eigen::Index(q), k))])
+            if (part[size_t(r)] >= 0 && part[size_t(r)] != c) blocked[size_t(part[size_t(r)])] = 1;
+      }
+    }
+    std::vector<char> out(nq, 0);
+    for (size_t q = 0; q < nq; ++q) out[q] = part[q] >= 0 && chosen[size_t(part[q])];
+    close(out);
+    return out;
+  }
+
+ private:
+  /// Edge i has exactly one padded quad.
+  bool border(const std::vector<char>& pad, size_t i) const {
+    const BoundaryEdge& e = edges_[i];
+    return e.quads == 2 && pad[size_t(e.q0)] != pad[size_t(e.q1)];
+  }
+
+  Vec3 point(int v) const { return Vec3(mesh_.V.row(v).transpose()); }
+
+  /// Per edge: the lattice turns by +90 (one hex on the edge), 0 (two) or -90 degrees (three), the surface by
+  /// the signed angle between its quads' normals. Both quads of an edge whose turns differ by more than the
+  /// tolerance are seeds; the layer may end on an edge that is convex at about 90 degrees in both.
+  void classify(double tolerance_deg) {
+    const size_t nq = size_t(Q_.rows());
+    seed_.assign(nq, 0);
+    std::vector<Vec3> normal(nq), centroid(nq);
+    for (size_t q = 0; q < nq; ++q) {
+      const auto r = Eigen::Index(q);
+      const Vec3 c0 = point(Q_(r, 0)), c1 = point(Q_(r, 1)), c2 = point(Q_(r, 2)), c3 = point(Q_(r, 3));
+      const Vec3 n = (c2 - c0).cross(c3 - c1);
+      normal[q] = n.norm() > 0 ? Vec3(n.normalized()) : Vec3::Zero();
+      centroid[q] = 0.25 * (c0 + c1 + c2 + c3);
+    }
+    may_end_.assign(edges_.size(), 0);
+    for (size_t i = 0; i < edges_.size(); ++i) {
+      const BoundaryEdge& e = edges_[i];
+      const bool manifold = e.quads == 2 && e.hexes >= 1 && e.hexes <= 3 && !normal[size_t(e.q0)].isZero() &&
+                            !normal[size_t(e.q1)].isZero();
+      if (!manifold) {  // every quad on it
+        for (Eigen::Index q = 0; q < Q_.rows(); ++q)
+          for (int k = 0; k < 4; ++k) {
+            const int a = Q_(q, k), b = Q_(q, (k + 1) % 4);
+            if (std::min(a, b) == e.a && std::max(a, b) == e.b) seed_[size_t(q)] = 1;
+          }
+        continue;
+      }
+      const Vec3& n0 = normal[size_t(e.q0)];
+      const double angle = std::acos(std::clamp(n0.dot(normal[size_t(e.q1)]), -1.0, 1.0)) * 180.0 / M_PI;
+      const bool convex = (centroid[size_t(e.q1)] - 0.5 * (point(e.a) + point(e.b))).dot(n0) < 0;
+      const double surface_turn = convex ? angle : -angle, lattice_turn = 90.0 * (2 - e.hexes);
+      if (std::abs(surface_turn - lattice_turn) > tolerance_deg)
+        seed_[size_t(e.q0)] = seed_[size_t(e.q1)] = 1;
+      else
+        may_end_[i] = e.hexes == 1;
+    }
+  }
+
+  const HexMesh& mesh_;
+  const BoundaryQuadMatrix& Q_;
+  std::vector<BoundaryEdge> edges_;
+  std::vector<char> seed_, may_end_;
+  std::vector<std::vector<int>> at_, quads_at_;  ///< per vertex: its boundary edges, its boundary quads
+};
+
+}  // namespace
+
+std::vector<char> select_padded_quads(const HexMesh& mesh, const BoundaryQuadMatrix& Q, double tolerance_deg) {
+  const LayerPlan plan(mesh, Q, tolerance_deg);
+  std::vector<char> pad = plan.seeds();
+  plan.close(pad);
+  return pad;
+}
+
+namespace {
+
+/// One layer: a hex on each padded quad of Q (the boundary quads of `mesh`), its inner quad on new copies of the
+/// quad's vertices, which the old hexes take (pad_boundary). `layer_hex` (per hex of the result, 1 for a layer
+/// hex) is extended by the new hexes. `thin_ends` (optional) gets the vertices where the layer ends whose
+/// offset had to be cut below a quarter to keep the hexes there from inverting.
+HexMesh extrude_layer(const HexMesh& mesh, const BoundaryQuadMatrix& Q, const std::vector<char>& padded,
+                      const TriangleTree* tree, const PadParams& p, PadStats& st, std::vector<char>& layer_hex,
+                      std::vector<int>* thin_ends = nullptr) {
+  const Eigen::Index nv = mesh.V.rows(), nh = mesh.H.rows();
+  const Eigen::Index layer = Eigen::Index(std::count(padded.begin(), padded.end(), 1));
+
+  std::vector<int> inner(size_t(nv), -1);
+  std::vector<char> on_boundary(size_t(nv), 0);
+  int nb = 0;
+  for (Eigen::Index q = 0; q < Q.rows(); ++q)
+    for (int k = 0; k < 4; ++k) {
+      on_boundary[size_t(Q(q, k))] = 1;
+      if (padded[size_t(q)] && inner[size_t(Q(q, k))] < 0) inner[size_t(Q(q, k))] = int(nv) + nb++;
+    }
+
+  HexMesh out;
+  out.source = mesh.source;
+  out.V.resize(nv + nb, 3);
+  out.V.topRows(nv) = mesh.V;
+  if (tree) {
+    tbb::parallel_for(Eigen::Index(0), nv, [&](Eigen::Index v) {
+      if (on_boundary[size_t(v)]) out.V.row(v) = tree->closest(mesh.V.row(v).transpose()).point.transpose();
+    });
+  }
+  // averaged outward normal (area weighted) over the padded quads and mean boundary edge length of each
+  // boundary vertex with an inner copy; where the layer ends (a vertex with unpadded quads too), the offset
+  // runs along the unpadded side: along its edges between two unpadded quads, or its one quad's diagonal
+  std::vector<Vec3> normal(static_cast<size_t>(nb), Vec3::Zero()), along(static_cast<size_t>(nb), Vec3::Zero());
+  std::vector<double> edge(static_cast<size_t>(nb), 0.0);
+  std::vector<int> edges(static_cast<size_t>(nb), 0);
+  std::vector<char> ends(static_cast<size_t>(nb), 0);
+  for (Eigen::Index q = 0; q < Q.rows(); ++q) {
+    Vec3 c[4];
+    for (int k = 0; k < 4; ++k) c[k] = out.V.row(Q(q, k)).transpose();
+    const Vec3 n = 0.5 * (c[2] - c[0]).cross(c[3] - c[1]);
+    for (int k = 0; k < 4; ++k) {
+      if (inner[size_t(Q(q, k))] < 0) continue;
+      const size_t b = size_t(inner[size_t(Q(q, k))] - nv);
+      if (!padded[size_t(q)]) {
+        ends[b] = 1;
+        continue;
+      }
+      normal[b] += n;
+      edge[b] += (c[(k + 1) % 4] - c[k]).norm() + (c[(k + 3) % 4] - c[k]).norm();
+      edges[b] += 2;
+    }
+  }
+  if (layer < Q.rows()) {
+    const std::vector<BoundaryEdge> bedges = quad_edges(mesh, Q);
+    // the layer's end through a vertex: its first end edge's direction minus its second's (length 2 where the
+    // end runs straight through the vertex, about 1.4 where it turns by 90 degrees)
+    std::vector<Vec3> end_tangent(static_cast<size_t>(nb), Vec3::Zero());
+    for (const BoundaryEdge& e : bedges)
+      if (e.quads == 2 && padded[size_t(e.q0)] != padded[size_t(e.q1)])
+        for (auto [v, w] : {std::pair{e.a, e.b}, std::pair{e.b, e.a}})
+          if (inner[size_t(v)] >= 0) {
+            const size_t b = size_t(inner[size_t(v)] - nv);
+            const Vec3 d = (out.V.row(w) - out.V.row(v)).transpose().normalized();
+            end_tangent[b] = end_tangent[b].isZero() ? d : Vec3(end_tangent[b] - d);  // first minus second
+          }
+    // edges between two unpadded quads, from a vertex where the layer ends, across the end (their part along
+    // the end removed: where the lattice is sheared they run slanted to it)
+    for (const BoundaryEdge& e : bedges)
+      if (e.quads == 2 && !padded[size_t(e.q0)] && !padded[size_t(e.q1)])
+        for (auto [v, w] : {std::pair{e.a, e.b}, std::pair{e.b, e.a}})
+          if (inner[size_t(v)] >= 0) {
+            const size_t b = size_t(inner[size_t(v)] - nv);
+            Vec3 d = (out.V.row(w) - out.V.row(v)).transpose().normalized();
+            const double t = end_tangent[b].norm();
+            if (t > 0.5) d -= d.dot(end_tangent[b] / t) * (end_tangent[b] / t);
+            along[b] += d;
+          }
+    for (Eigen::Index q = 0; q < Q.rows(); ++q)  // a vertex whose unpadded side is one quad: its diagonal
+      for (int k = 0; k < 4; ++k) {
+        const int v = Q(q, k);
+        if (padded[size_t(q)] || inner[size_t(v)] < 0) continue;
+        const size_t b = size_t(inner[size_t(v)] - nv);
+        if (along[b].isZero()) along[b] = (out.V.row(Q(q, (k + 2) % 4)) - out.V.row(v)).transpose().normalized();
+      }
+  }
+  std::vector<Vec3> offset(static_cast<size_t>(nb));
+  for (size_t b = 0; b < size_t(nb); ++b) {
+    const Vec3 dir = ends[b] ? along[b] : Vec3(-normal[b]);
+    const double len = dir.norm();
+    offset[b] = len > 0 ? Vec3(dir / len * p.thickness * edge[b] / std::max(edges[b], 1)) : Vec3::Zero();
+    st.layer_ends += ends[b];
+  }
+  // the inner copy of vertex v at `fraction` of its offset (on the surface where the layer ends)
+  auto place = [&](Eigen::Index v, double fraction) {
+    const size_t b = size_t(inner[size_t(v)] - nv);
+    Vec3 x = out.V.row(v).transpose() + fraction * offset[b];
+    if (ends[b] && tree) x = tree->closest(x).point;
+    out.V.row(inner[size_t(v)]) = x.transpose();
+  };
+  for (Eigen::Index v = 0; v < nv; ++v)
+    if (inner[size_t(v)] >= 0) place(v, 1.0);
+
+  // hexes: the old ones on the inner copies, then one per padded boundary quad (inner quad at the bottom)
+  out.H.resize(nh + layer, 8);
+  for (Eigen::Index h = 0; h < nh; ++h)
+    for (int k = 0; k < 8; ++k) {
+      const int v = mesh.H(h, k);
+      out.H(h, k) = inner[size_t(v)] >= 0 ? inner[size_t(v)] : v;
+    }
+  for (Eigen::Index q = 0, r = nh; q < Q.rows(); ++q) {
+    if (!padded[size_t(q)]) continue;
+    for (int k = 0; k < 4; ++k) {
+      out.H(r, k) = inner[size_t(Q(q, k))];
+      out.H(r, k + 4) = Q(q, k);
+    }
+    ++r;
+  }
+
+  // limit the offsets so that no hex that was valid, and no layer hex, inverts
+  std::vector<char> was_inverted(size_t(out.H.rows()), 0);
+  for (Eigen::Index h = 0; h < nh; ++h)
+    was_inverted[size_t(h)] = hex_scaled_jacobian(hex_points(mesh.V, mesh.H, h)).corner_min <= 0;
+  std::vector<double> scale(static_cast<size_t>(nb), 1.0);
+  for (int round = 0; round <= p.max_halvings; ++round) {
+    std::vector<char> shrink(static_cast<size_t>(nb), 0);
+    bool any = false;
+    for (Eigen::Index h = 0; h < out.H.rows(); ++h) {
+      if (was_inverted[size_t(h)] || hex_scaled_jacobian(hex_points(out.V, out.H, h)).corner_min > 0) continue;
+      for (int k = 0; k < 8; ++k)
+        if (out.H(h, k) >= nv) shrink[size_t(out.H(h, k) - nv)] = 1, any = true;
+    }
+    if (!any || round == p.max_halvings) break;
+    for (Eigen::Index v = 0; v < nv; ++v) {
+      const int b = inner[size_t(v)] - int(nv);
+      if (b < 0 || !shrink[size_t(b)]) continue;
+      scale[size_t(b)] *= 0.5;
+      place(v, scale[size_t(b)]);
+    }
+  }
+  for (double s : scale) st.limited += s < 1.0;
+  if (thin_ends)
+    for (Eigen::Index v = 0; v < nv; ++v)
+      if (inner[size_t(v)] >= 0 && ends[size_t(inner[size_t(v)] - nv)] && scale[size_t(inner[size_t(v)] - nv)] < 0.25)
+        thin_ends->push_back(int(v));
+  st.hexes_added += long(layer);
+  st.vertices_added += nb;
+  layer_hex.resize(size_t(out.H.rows()), 1);
+  return out;
+}
+
+/// Selective padding stops after this many layers: the last one takes every quad that still needs one.
+constexpr int kMaxLayers = 4;
+/// A layer whose ends had to be cut thin is made again, grown round them, at most this many times.
+constexpr int kEndRetries = 3;
+
+}  // namespace
+
 HexMesh pad_boundary(const HexMesh& input, const SurfaceMesh* surface, const PadParams& p, PadStats* stats) {
   const auto t0 = std::chrono::steady_clock::now();
   check_hex_mesh(input);
@@ -312,91 +668,55 @@ HexMesh pad_boundary(const HexMesh& input, const SurfaceMesh* surface, const Pad
   const auto Q = hex_boundary_quads(mesh);
   if (Q.rows() == 0)
     throw InvalidInput((mesh.source.empty() ? std::string("hex mesh") : mesh.source) + ": no boundary quads to pad");
-  const Eigen::Index nv = mesh.V.rows(), nh = mesh.H.rows();
-
-  std::vector<int> inner(size_t(nv), -1);
-  int nb = 0;
-  for (Eigen::Index q = 0; q < Q.rows(); ++q)
-    for (int k = 0; k < 4; ++k)
-      if (inner[size_t(Q(q, k))] < 0) inner[size_t(Q(q, k))] = int(nv) + nb++;
-
-  HexMesh out;
-  out.source = mesh.source;
-  out.V.resize(nv + nb, 3);
-  out.V.topRows(nv) = mesh.V;
-  if (surface) {
-    TriangleTree tree(surface->V, surface->F);
-    tbb::parallel_for(Eigen::Index(0), nv, [&](Eigen::Index v) {
-      if (inner[size_t(v)] >= 0) out.V.row(v) = tree.closest(mesh.V.row(v).transpose()).point.transpose();
-    });
+  std::unique_ptr<TriangleTree> tree;
+  if (surface) tree = std::make_unique<TriangleTree>(surface->V, surface->F);
+  std::vector<char> layer_hex(size_t(mesh.H.rows()), 0);
+  if (!p.selective) {
+    mesh = extrude_layer(mesh, Q, std::vector<char>(size_t(Q.rows()), 1), tree.get(), p, st, layer_hex);
+    st.layers = 1;
+  } else {
+    for (int round = 0; round < kMaxLayers; ++round) {
+      std::vector<int> owner;
+      const auto B = hex_boundary_quads(mesh, &owner);
+      const LayerPlan plan(mesh, B, p.turn_tolerance);
+      std::vector<char> pad = plan.seeds();
+      for (size_t q = 0; q < pad.size(); ++q)  // a quad on a layer hex has had its layer
+        pad[q] = pad[q] && !layer_hex[size_t(owner[q])];
+      plan.close(pad);
+      if (std::find(pad.begin(), pad.end(), 1) == pad.end()) break;
+      if (round + 1 < kMaxLayers) pad = plan.first_layer(pad);
+      // where the lattice is sheared along the end, the end's inner copies cannot slide along the other side
+      // without turning its hexes over: the layer takes the quads round such a vertex too, and is made again
+      for (int attempt = 0;; ++attempt) {
+        PadStats trial = st;
+        std::vector<char> trial_hex = layer_hex;
+        std::vector<int> thin;
+        HexMesh next = extrude_layer(mesh, B, pad, tree.get(), p, trial, trial_hex, &thin);
+        if (thin.empty() || attempt == kEndRetries) {
+          mesh = std::move(next), st = trial, layer_hex = std::move(trial_hex);
+          break;
+        }
+        for (Eigen::Index q = 0; q < B.rows(); ++q)
+          for (int k = 0; k < 4; ++k)
+            if (std::binary_search(thin.begin(), thin.end(), B(q, k))) pad[size_t(q)] = 1;
+        plan.close(pad);
+      }
+      ++st.layers;
+    }
+    if (st.layers == 0 && tree)  // no layer: the boundary vertices still go onto the surface
+      for (Eigen::Index q = 0; q < Q.rows(); ++q)
+        for (int k = 0; k < 4; ++k)
+          mesh.V.row(Q(q, k)) = tree->closest(mesh.V.row(Q(q, k)).transpose()).point.transpose();
   }
-  // averaged outward normal (area weighted) and mean boundary edge length of each boundary vertex
-  std::vector<Vec3> normal(static_cast<size_t>(nb), Vec3::Zero());
-  std::vector<double> edge(static_cast<size_t>(nb), 0.0);
-  std::vector<int> edges(static_cast<size_t>(nb), 0);
-  for (Eigen::Index q = 0; q < Q.rows(); ++q) {
-    Vec3 c[4];
-    for (int k = 0; k < 4; ++k) c[k] = out.V.row(Q(q, k)).transpose();
-    const Vec3 n = 0.5 * (c[2] - c[0]).cross(c[3] - c[1]);
-    for (int k = 0; k < 4; ++k) {
-      const size_t b = size_t(inner[size_t(Q(q, k))] - nv);
-      normal[b] += n;
-      edge[b] += (c[(k + 1) % 4] - c[k]).norm() + (c[(k + 3) % 4] - c[k]).norm();
-      edges[b] += 2;
-    }
-  }
-  std::vector<Vec3> offset(static_cast<size_t>(nb));
-  for (size_t b = 0; b < size_t(nb); ++b) {
-    const double len = normal[b].norm();
-    offset[b] = len > 0 ? Vec3(-normal[b] / len * p.thickness * edge[b] / std::max(edges[b], 1)) : Vec3::Zero();
-  }
-  for (Eigen::Index v = 0; v < nv; ++v)
-    if (inner[size_t(v)] >= 0)
-      out.V.row(inner[size_t(v)]) = out.V.row(v) + offset[size_t(inner[size_t(v)] - nv)].transpose();
-
-  // hexes: the old ones on the inner copies, then one per boundary quad (inner quad at the bottom)
-  out.H.resize(nh + Q.rows(), 8);
-  for (Eigen::Index h = 0; h < nh; ++h)
-    for (int k = 0; k < 8; ++k) {
-      const int v = mesh.H(h, k);
-      out.H(h, k) = inner[size_t(v)] >= 0 ? inner[size_t(v)] : v;
-    }
-  for (Eigen::Index q = 0; q < Q.rows(); ++q)
-    for (int k = 0; k < 4; ++k) {
-      out.H(nh + q, k) = inner[size_t(Q(q, k))];
-      out.H(nh + q, k + 4) = Q(q, k);
-    }
-
-  // limit the offsets so that no hex that was valid, and no layer hex, inverts
-  std::vector<char> was_inverted(size_t(out.H.rows()), 0);
-  for (Eigen::Index h = 0; h < nh; ++h)
-    was_inverted[size_t(h)] = hex_scaled_jacobian(hex_points(mesh.V, mesh.H, h)).corner_min <= 0;
-  std::vector<double> scale(static_cast<size_t>(nb), 1.0);
-  for (int round = 0; round <= p.max_halvings; ++round) {
-    std::vector<char> shrink(static_cast<size_t>(nb), 0);
-    bool any = false;
-    for (Eigen::Index h = 0; h < out.H.rows(); ++h) {
-      if (was_inverted[size_t(h)] || hex_scaled_jacobian(hex_points(out.V, out.H, h)).corner_min > 0) continue;
-      for (int k = 0; k < 8; ++k)
-        if (out.H(h, k) >= nv) shrink[size_t(out.H(h, k) - nv)] = 1, any = true;
-    }
-    if (!any || round == p.max_halvings) break;
-    for (Eigen::Index v = 0; v < nv; ++v) {
-      const int b = inner[size_t(v)] - int(nv);
-      if (b < 0 || !shrink[size_t(b)]) continue;
-      scale[size_t(b)] *= 0.5;
-      out.V.row(nv + b) = out.V.row(v) + scale[size_t(b)] * offset[size_t(b)].transpose();
-    }
-  }
-  for (double s : scale) st.limited += s < 1.0;
+  std::vector<int> owner;
+  const auto R = hex_boundary_quads(mesh, &owner);
+  for (Eigen::Index q = 0; q < R.rows(); ++q) st.unpadded += !layer_hex[size_t(owner[size_t(q)])];
   Eigen::VectorXd sj, corner;
-  hex_scaled_jacobians(out, sj, corner);
+  hex_scaled_jacobians(mesh, sj, corner);
   st.inverted = long((corner.array() <= 0).count());
-  st.hexes_added = long(Q.rows());
-  st.vertices_added = nb;
   st.seconds = seconds_since(t0);
   if (stats) *stats = st;
-  return out;
+  return mesh;
 }
 
 }  // namespace polyhex

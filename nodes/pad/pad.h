@@ -21,6 +21,10 @@ struct PadParams {
   double peel_sj = 0.0;         ///< see peel_rounds
   bool repair_nonmanifold =
       true;  ///< first remove hexes at non-manifold boundary edges and vertices (remove_nonmanifold_boundary)
+  bool selective = true;  ///< pad only where the lattice turns otherwise than the surface (select_padded_quads); the
+                          ///< layer ends on convex creases
+  double turn_tolerance = 30.0;  ///< degrees: a boundary edge whose lattice and surface turns differ by more needs
+                                 ///< the layer on both sides (see select_padded_quads)
 };
 
 struct PadStats {
@@ -34,6 +38,9 @@ struct PadStats {
   long nonmanifold_edges = 0, nonmanifold_vertices = 0;  ///< found in the input (repair_nonmanifold)
   long nonmanifold_removed = 0;                          ///< hexes removed to make the boundary manifold
   long nonmanifold_left = 0;  ///< non-manifold boundary edges + vertices of the result (0 unless the repair gave up)
+  int layers = 0;             ///< layers added (selective padding adds them in turn, up to 4)
+  long unpadded = 0;          ///< boundary quads of the result on hexes of the input (no layer over them)
+  long layer_ends = 0;        ///< vertices where the layer ends on a crease: their inner copy lies on the surface
   double seconds = 0;
 
   /// Report names (runtime/stat_fields.h).
@@ -44,6 +51,7 @@ struct PadStats {
         stat("doublets", &S::doublets), stat("hexes_removed", &S::hexes_removed), stat("peeled", &S::peeled),
         stat("nonmanifold_edges", &S::nonmanifold_edges), stat("nonmanifold_vertices", &S::nonmanifold_vertices),
         stat("nonmanifold_removed", &S::nonmanifold_removed), stat("nonmanifold_left", &S::nonmanifold_left),
+        stat("layers", &S::layers), stat("unpadded", &S::unpadded), stat("layer_ends", &S::layer_ends),
         stat("inverted", &S::inverted), stat("seconds", &S::seconds));
   }
 };
@@ -108,11 +116,30 @@ Peeled peel_boundary_hexes(const HexMesh& mesh, double max_sj, int rounds);
 /// \throw Interrupted after SIGINT/SIGTERM
 DoubletRepair remove_boundary_doublets(const HexMesh& mesh);
 
+/// Which boundary quads get a layer hex (selective padding, after Cherchi et al. 2019, "Selective padding for
+/// polycube-based hexahedral meshing"). The layer is there for the hexes at PolyCube edges, whose two boundary
+/// faces meet at the lattice's right angle where the surface is smooth (or turns by another angle): flat hexes.
+/// Where the surface turns as the lattice does (a part's convex or concave edge at about 90 degrees), the hexes
+/// are good without it, and a layer across a convex edge caps them at 0.71 (0.58 at a corner).
+/// Per boundary edge: the lattice turns by +90 (one hex on the edge: convex), 0 (two) or -90 degrees (three);
+/// the surface by the signed angle between the two quads' normals. Both quads of an edge whose two turns differ
+/// by more than `tolerance_deg` (or that is not manifold) are padded; then, until nothing changes, the layer
+/// grows across every edge where it would end that is not convex within the tolerance of 90 degrees, and over
+/// the unpadded quads of every vertex whose padded quads are not one fan between two such edges.
+/// \param mesh  conforming hex mesh   \param Q  its boundary quads (hex_boundary_quads)
+/// \return per quad of Q: 1 = padded
+std::vector<char> select_padded_quads(const HexMesh& mesh,
+                                      const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>& Q,
+                                      double tolerance_deg);
+
 /// Extrudes the boundary into one layer of hexes. Every boundary vertex v is duplicated: the inner copy
 /// replaces v in the existing hexes and moves inward along the averaged inward normal of its boundary
 /// quads by thickness x (mean length of its edges), halved while a hex it touches is inverted (never
 /// below the original positions' validity); the outer copy stays (projected onto `surface` if given).
 /// For each boundary quad (a, b, c, d), outward in its hex, the new hex is (a', b', c', d', a, b, c, d).
+/// With p.selective only the quads of select_padded_quads get one; where the layer ends (on a convex crease),
+/// the inner copy of a vertex moves away from the layer along the unpadded side's surface instead, and the
+/// unpadded quads there take it: the layer hex's side face becomes a strip of the boundary.
 /// \param mesh     conforming hex mesh, VTK_HEXAHEDRON order
 /// \param surface  the input surface or null; if given, the outer vertices are projected onto it
 /// With p.peel_rounds > 0 the poor boundary hexes are removed first (peel_boundary_hexes); with

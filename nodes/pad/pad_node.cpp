@@ -24,7 +24,14 @@ const bool registered = register_node(
                      .add("peel_sj", &P::peel_sj, "see peel_rounds", -1.0, 0.5)
                      .add("repair_nonmanifold", &P::repair_nonmanifold,
                           "first remove hexes at non-manifold boundary edges and vertices (sheets touching along an "
-                          "edge or at a vertex)"),
+                          "edge or at a vertex)")
+                     .add("selective", &P::selective,
+                          "pad only where the lattice turns otherwise than the surface; the layer ends on convex "
+                          "creases")
+                     .add("turn_tolerance", &P::turn_tolerance,
+                          "degrees: a boundary edge whose lattice and surface turns differ by more is padded on both "
+                          "sides",
+                          0.0, 90.0),
                  {{"hexes", artefact_name<HexMesh>()}, {"surface", artefact_name<SurfaceMesh>(), true}},
                  artefact_name<HexMesh>(),
                  [](const P& p, const Inputs& in, NodeContext& ctx) {
@@ -40,7 +47,7 @@ const bool registered = register_node(
                      ctx.warn(std::to_string(s.inverted) + " hexes inverted after padding (optimize untangles them)");
                    return make_artefact(std::move(out));
                  })
-        .with_version("5"));
+        .with_version("12"));
 
 }  // namespace
 }  // namespace polyhex

@@ -10,9 +10,11 @@ using namespace polyhex;
 TEST_CASE("padding a 3x3x3 grid adds 54 hexes and keeps the boundary closed", "[pad]") {
   HexMesh g = test::grid_hex_mesh(3, 3, 3);
   SurfaceMesh s = test::voxel_surface(test::voxel_box(3, 3, 3));
+  PadParams full;  // the whole layer (selective padding leaves a box's lattice alone: test_pad_selective.cpp)
+  full.selective = false;
   for (bool with_surface : {false, true}) {
     PadStats st;
-    HexMesh m = pad_boundary(g, with_surface ? &s : nullptr, {}, &st);
+    HexMesh m = pad_boundary(g, with_surface ? &s : nullptr, full, &st);
     CHECK(st.hexes_added == 54);
     CHECK(st.vertices_added == 56);
     CHECK(m.H.rows() == 27 + 54);
@@ -39,6 +41,7 @@ TEST_CASE("padding a 3x3x3 grid adds 54 hexes and keeps the boundary closed", "[
 TEST_CASE("a thick padding of a single hex is limited so that nothing inverts", "[pad]") {
   HexMesh g = test::grid_hex_mesh(1, 1, 1);
   PadParams p;
+  p.selective = false;
   p.thickness = 0.9;  // corners would cross the centre: (0,0,0) -> 0.52 (1,1,1)
   PadStats st;
   HexMesh m = pad_boundary(g, nullptr, p, &st);

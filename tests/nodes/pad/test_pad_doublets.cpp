@@ -101,6 +101,7 @@ TEST_CASE("remove_boundary_doublets removes the hex wrapped around a doublet edg
   // wrapped hex is inverted, peeling alone would remove it)
   PadParams no_peel;
   no_peel.peel_rounds = 0;
+  no_peel.selective = false;  // the whole layer: one hex per boundary quad
   PadStats st;
   const HexMesh padded = pad_boundary(m, nullptr, no_peel, &st);
   CHECK(st.doublets == 2);

@@ -85,7 +85,9 @@ TEST_CASE("pad_boundary repairs a non-manifold edge first: manifold result, no i
   const HexMesh m = grid_cells(2, 2, 2, {0, 3, 4, 7});
   REQUIRE(find_boundary_defects(m).edges.size() == 2);  // the column x = y = 1, two cells tall
   PadStats st;
-  const HexMesh out = pad_boundary(m, nullptr, {}, &st);
+  PadParams full;  // a layer everywhere (selective: on this blocky lattice, nowhere)
+  full.selective = false;
+  const HexMesh out = pad_boundary(m, nullptr, full, &st);
   CHECK(st.nonmanifold_edges == 2);
   CHECK(st.nonmanifold_removed >= 1);
   CHECK(st.nonmanifold_left == 0);
@@ -94,7 +96,7 @@ TEST_CASE("pad_boundary repairs a non-manifold edge first: manifold result, no i
   CHECK(d.edges.empty());
   CHECK(d.vertices.empty());
 
-  PadParams keep;
+  PadParams keep = full;
   keep.repair_nonmanifold = false;
   PadStats st2;
   pad_boundary(m, nullptr, keep, &st2);
