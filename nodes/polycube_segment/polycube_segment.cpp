@@ -1,6 +1,7 @@
 #include "nodes/polycube_segment/polycube_segment.h"
 
 #include "nodes/algorithms/chart_order.h"
+#include "nodes/algorithms/reference_length.h"
 #include "nodes/polycube_segment/segment_internal.h"
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
@@ -21,13 +22,14 @@ namespace {
 /// One full §5.1 run with a given number of normal-smoothing passes.
 /// `graph`: the deformed mesh's tet edges (for the order cycles; only used with p.split_order_cycles).
 PolyCubeSegmentation segment_once(const Surface& s, const PolyCubeSegmentParams& p, int smoothing,
-                                  const TetEdgeGraph* graph) {
+                                  const TetEdgeGraph* graph, const InputCreases* creases) {
   throw_if_interrupted();
-  std::vector<Vec3> normal = smoothed_normals(s, smoothing);
+  std::vector<Vec3> normal = smoothed_normals(s, smoothing, creases ? &creases->edge : nullptr);
   State st;
   st.label.resize(s.nf());
   st.band.assign(s.nf(), 0);
   for (int t = 0; t < s.nf(); ++t) st.label[t] = closest_label(normal[t]);
+  if (creases) label_planar_patches(s, normal, *creases, st);
   clean_up(s, normal, p, st);
   const double h = p.hex_edge_length * s.diag;
   if (p.split_multi_orientation) split_multi_orientation(s, normal, h, p.max_splits, st);
@@ -93,16 +95,24 @@ RowMatrixX3i boundary_triangles(const TetMesh& mesh) {
   return F;
 }
 
-PolyCubeSegmentation segment_polycube(const TetMesh& deformed, const PolyCubeSegmentParams& p) {
+PolyCubeSegmentation segment_polycube(const TetMesh& deformed, const PolyCubeSegmentParams& p, const TetMesh* input) {
   RowMatrixX3i F = boundary_triangles(deformed);
   Surface s = build_surface(deformed.V, F);
   std::unique_ptr<TetEdgeGraph> graph;  // the order cycles' evidence needs the tet edges (not built when off)
   if (p.split_order_cycles) graph = std::make_unique<TetEdgeGraph>(deformed.T, int(deformed.V.rows()));
-  PolyCubeSegmentation best = segment_once(s, p, p.smoothing_iterations, graph.get());
+  std::unique_ptr<InputCreases> creases;
+  if (input && p.follow_creases) {
+    if (input->V.rows() != deformed.V.rows() || input->T.rows() != deformed.T.rows())
+      throw InvalidInput(deformed.source + ": the input tets (" + std::to_string(input->V.rows()) +
+                         " vertices) are not the deformed mesh's (" + std::to_string(deformed.V.rows()) + ")");
+    creases =
+        std::make_unique<InputCreases>(input_creases(s, input->V, p.hex_edge_length * reference_length(input->V)));
+  }
+  PolyCubeSegmentation best = segment_once(s, p, p.smoothing_iterations, graph.get(), creases.get());
   int smoothing = p.smoothing_iterations;
   for (int retry = 0; retry < p.fallback_retries && !best.valid; ++retry) {
     smoothing = std::max(1, 2 * smoothing);
-    PolyCubeSegmentation r = segment_once(s, p, smoothing, graph.get());
+    PolyCubeSegmentation r = segment_once(s, p, smoothing, graph.get(), creases.get());
     if (r.valid) {
       r.warnings.push_back("PolyCube structure invalid with " + std::to_string(p.smoothing_iterations) +
                            " normal smoothing passes (" + std::to_string(best.problems.size()) +

@@ -45,6 +45,8 @@ struct PolyCubeSegmentParams {
   double narrow_chart_faces = 4.0;  ///< ... and smaller than this many hex faces (h²) where it stays valid (extension
                                     ///< of §5.1, below); either 0 = off, [0, 100] each
   int fallback_retries = 2;    ///< if invalid, retry with doubled smoothing this many times (reported as a warning)
+  bool follow_creases = true;  ///< with the input tets: normals are not smoothed across the input's creases (sharp at
+                               ///< half a hex edge), and each planar face between creases takes one label (beyond §5.1)
   bool allow_invalid = false;  ///< pass an invalid structure on with a warning instead of failing
   bool save_surface = false;   ///< write <id>.charts.vtk (also written with --save-all)
 };
@@ -60,10 +62,14 @@ RowMatrixX3i boundary_triangles(const TetMesh& mesh);
 /// labelling is invalid it retries with doubled smoothing up to p.fallback_retries times; a retry
 /// that succeeds is reported in `warnings`.
 /// \param deformed  the output of rotation_deform (same connectivity as the input tet mesh)
+/// \param input     the input tet mesh (optional): its boundary's creases guide the labels (follow_creases), so
+///                  that a part's edges become chart boundaries where an axis can carry them
 /// \pre p.hex_edge_length > 0
-/// \throw InvalidInput when the boundary is empty or not a closed 2-manifold (names an edge)
+/// \throw InvalidInput when the boundary is empty or not a closed 2-manifold (names an edge), or the input's
+///        sizes are not the deformed mesh's
 /// \throw Interrupted after SIGINT/SIGTERM (runtime/cancel.h), checked between the repair passes
-PolyCubeSegmentation segment_polycube(const TetMesh& deformed, const PolyCubeSegmentParams& p = {});
+PolyCubeSegmentation segment_polycube(const TetMesh& deformed, const PolyCubeSegmentParams& p = {},
+                                      const TetMesh* input = nullptr);
 
 /// Same-axis chart pairs of `seg` whose order evidence on `deformed` closes a cycle (chart_order.h),
 /// at hex edge hex_edge_length × the boundary's reference length: what split_order_cycles reduces.

@@ -64,12 +64,16 @@ const bool registered = register_node(
             .add("narrow_chart_faces", &P::narrow_chart_faces,
                  "... and smaller than this many hex faces, where it stays valid (0 = off)", 0, 100)
             .add("fallback_retries", &P::fallback_retries, "retries with doubled smoothing when invalid", 0, 10)
+            .add("follow_creases", &P::follow_creases,
+                 "with the input tets: no normal smoothing across the input's creases, one label per planar face")
             .add("allow_invalid", &P::allow_invalid, "pass an invalid structure on with a warning")
             .add("save_surface", &P::save_surface, "write <id>.charts.vtk"),
-        {{"deformed", artefact_name<TetMesh>()}}, artefact_name<PolyCubeSegmentation>(),
+        {{"deformed", artefact_name<TetMesh>()}, {"tets", artefact_name<TetMesh>(), true}},
+        artefact_name<PolyCubeSegmentation>(),
         [](const P& p, const Inputs& in, NodeContext& ctx) {
           auto mesh = in.get<TetMesh>(0);
-          PolyCubeSegmentation s = segment_polycube(*mesh, p);
+          auto input = in.has(1) ? in.get<TetMesh>(1) : nullptr;
+          PolyCubeSegmentation s = segment_polycube(*mesh, p, input.get());
           ctx.metrics.update(segmentation_metrics(s));
           for (auto& w : s.warnings) ctx.warn(w);
           if (ctx.save_all || p.save_surface)
@@ -81,7 +85,7 @@ const bool registered = register_node(
           }
           return make_artefact(std::make_shared<const PolyCubeSegmentation>(std::move(s)));
         })
-        .with_version("7"));
+        .with_version("11"));
 
 }  // namespace
 }  // namespace polyhex

@@ -50,8 +50,27 @@ struct Surface {
 Surface build_surface(const RowMatrixX3d& V, const RowMatrixX3i& F);
 
 /// §5.1: triangle normals averaged `iterations` times with their edge neighbours (unit normals,
-/// equal weights, so small triangles next to large ones keep their own say).
-std::vector<Vec3> smoothed_normals(const Surface& s, int iterations);
+/// equal weights, so small triangles next to large ones keep their own say). With `crease` (#F by 3: the
+/// triangle's edge k is a crease of the input), not across creases: each side of a crease keeps its own.
+std::vector<Vec3> smoothed_normals(const Surface& s, int iterations,
+                                   const std::vector<std::array<char, 3>>* crease = nullptr);
+
+/// The input's creases on the segmented surface (beyond §5.1, issue 23): per triangle which of its edges are
+/// creases of the input (sharp at half a hex edge, features.h), and the patches they bound.
+struct InputCreases {
+  std::vector<std::array<char, 3>> edge;  ///< #F by 3: edge k of triangle t (vertices k, k+1) is a crease
+  std::vector<int> patch;                 ///< #F: patch id, triangles joined across edges that are not creases
+  int patches = 0;
+  std::vector<char> planar;  ///< per patch: the input's normals within kPlanarPatch degrees of their mean
+};
+
+/// A patch of the input is planar (one label for all of it) when its triangles' normals lie within this many
+/// degrees of their area-weighted mean.
+inline constexpr double kPlanarPatch = 10.0;
+
+/// The creases of the input tet mesh's boundary (same triangles as the segmented surface).
+/// \param X  the input's vertices (the deformed surface's rest positions)  \param h  the hex edge, absolute
+InputCreases input_creases(const Surface& s, const RowMatrixX3d& X, double h);
 
 /// Connected components of equal labels (charts). \return number of charts
 int label_components(const Surface& s, const std::vector<int>& label, std::vector<int>& chart);
@@ -104,6 +123,11 @@ struct State {
   int splits_multi = 0, splits_wedge = 0, splits_ramp = 0, splits_cycle = 0, splits_island = 0, repaired_corners = 0,
       removed_small = 0, removed_narrow = 0;
 };
+
+/// Gives every planar patch of the input one label: the one closest to the area-weighted mean of its smoothed
+/// (deformed) normals. A planar face of a part is one PolyCube face, its creases chart boundaries (or lines
+/// inside a chart, feature_lines.h); normals near a tie (a 45 degree chamfer) no longer split it.
+void label_planar_patches(const Surface& s, const std::vector<Vec3>& normal, const InputCreases& c, State& st);
 
 /// §5.1 multi-orientation charts: a chart touching a chart of the opposite direction along a
 /// curve is split there by a separating chart of width h (the hex edge length).

@@ -1,6 +1,7 @@
 /// @file segment_surface.cpp
 /// @brief The segmentation's surface: connectivity, labels and charts, PolyCube edges and corners.
 #include "nodes/algorithms/chart_order.h"
+#include "nodes/algorithms/features.h"
 #include "nodes/algorithms/reference_length.h"
 #include "nodes/polycube_segment/segment_internal.h"
 #include "runtime/cancel.h"
@@ -82,18 +83,78 @@ Surface build_surface(const RowMatrixX3d& V, const RowMatrixX3i& F) {
   return s;
 }
 
-std::vector<Vec3> smoothed_normals(const Surface& s, int iterations) {
+std::vector<Vec3> smoothed_normals(const Surface& s, int iterations, const std::vector<std::array<char, 3>>* crease) {
   std::vector<Vec3> n = s.normal;
   for (int it = 0; it < iterations; ++it) {
     std::vector<Vec3> m(n.size());
     for (int t = 0; t < s.nf(); ++t) {
       m[t] = n[t];
-      for (int k = 0; k < 3; ++k) m[t] += n[s.tri_nbrs[t][k]];
+      for (int k = 0; k < 3; ++k)
+        if (!crease || !(*crease)[size_t(t)][size_t(k)]) m[t] += n[s.tri_nbrs[t][k]];
       if (m[t].norm() > 0) m[t].normalize();
     }
     n.swap(m);
   }
   return n;
+}
+
+InputCreases input_creases(const Surface& s, const RowMatrixX3d& X, double h) {
+  InputCreases c;
+  const int nf = s.nf();
+  SurfaceMesh surface;
+  surface.V = X;
+  surface.F = *s.F;
+  const std::vector<std::array<int, 2>> sharp = crease_edges(find_creases(surface, kFeatureAngle, 1.5 * h, 0.5 * h));
+  c.edge.assign(size_t(nf), {0, 0, 0});
+  for (int t = 0; t < nf; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const int a = (*s.F)(t, k), b = (*s.F)(t, (k + 1) % 3);
+      c.edge[size_t(t)][size_t(k)] =
+          std::binary_search(sharp.begin(), sharp.end(), std::array<int, 2>{std::min(a, b), std::max(a, b)});
+    }
+  // patches: flood fill across edges that are not creases (tri_nbrs[t][k] is across edge k)
+  c.patch.assign(size_t(nf), -1);
+  std::vector<int> stack;
+  for (int t0 = 0; t0 < nf; ++t0) {
+    if (c.patch[size_t(t0)] >= 0) continue;
+    c.patch[size_t(t0)] = c.patches;
+    stack.assign(1, t0);
+    while (!stack.empty()) {
+      const int t = stack.back();
+      stack.pop_back();
+      for (int k = 0; k < 3; ++k) {
+        const int u = s.tri_nbrs[t][k];
+        if (!c.edge[size_t(t)][size_t(k)] && c.patch[size_t(u)] < 0) c.patch[size_t(u)] = c.patches, stack.push_back(u);
+      }
+    }
+    ++c.patches;
+  }
+  // planar patches: the input normals' spread round their mean
+  std::vector<Vec3> mean(size_t(c.patches), Vec3::Zero());
+  std::vector<Vec3> normal(static_cast<size_t>(nf));
+  for (int t = 0; t < nf; ++t) {
+    const Vec3 a = X.row((*s.F)(t, 0)).transpose(), b = X.row((*s.F)(t, 1)).transpose(),
+               d = X.row((*s.F)(t, 2)).transpose();
+    const Vec3 n = (b - a).cross(d - a);
+    normal[size_t(t)] = n.norm() > 0 ? Vec3(n.normalized()) : Vec3::Zero();
+    mean[size_t(c.patch[size_t(t)])] += n;
+  }
+  c.planar.assign(size_t(c.patches), 1);
+  const double cos_max = std::cos(kPlanarPatch * M_PI / 180.0);
+  for (auto& m : mean)
+    if (m.norm() > 0) m.normalize();
+  for (int t = 0; t < nf; ++t)
+    if (normal[size_t(t)].dot(mean[size_t(c.patch[size_t(t)])]) < cos_max) c.planar[size_t(c.patch[size_t(t)])] = 0;
+  return c;
+}
+
+void label_planar_patches(const Surface& s, const std::vector<Vec3>& normal, const InputCreases& c, State& st) {
+  std::vector<Vec3> mean(size_t(c.patches), Vec3::Zero());
+  for (int t = 0; t < s.nf(); ++t) mean[size_t(c.patch[size_t(t)])] += s.area[size_t(t)] * normal[size_t(t)];
+  for (int t = 0; t < s.nf(); ++t) {
+    const int q = c.patch[size_t(t)];
+    if (c.planar[size_t(q)] && mean[size_t(q)].norm() > 0) st.label[size_t(t)] = closest_label(mean[size_t(q)]);
+  }
 }
 
 int label_components(const Surface& s, const std::vector<int>& label, std::vector<int>& chart) {

@@ -423,8 +423,9 @@ TEST_CASE("polycube_segment node: metrics, VTK output and failure", "[segment]")
   const NodeSpec* spec = Registry::instance().find("polycube_segment");
   REQUIRE(spec != nullptr);
   CHECK(spec->output == "PolyCubeSegmentation");
-  REQUIRE(spec->inputs.size() == 1);
+  REQUIRE(spec->inputs.size() == 2);
   CHECK(spec->inputs[0].name == "deformed");
+  CHECK(spec->inputs[1].name == "tets");  // optional: the input's creases
   auto dir = std::filesystem::temp_directory_path() / ("polyhex_segment_test_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   NodeContext ctx;
