@@ -1,7 +1,9 @@
 #include "nodes/position_deform/position_deform.h"
 
 #include "nodes/algorithms/chart_order.h"
+#include "nodes/algorithms/features.h"
 #include "nodes/algorithms/reference_length.h"
+#include "nodes/position_deform/feature_lines.h"
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
 #include "runtime/factorization.h"
@@ -24,6 +26,11 @@ namespace polyhex {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+/// A crease inside a chart becomes a feature line when it is at least this many hex edges long: a short
+/// straight run is as likely a scan's faceting (femur keeps a dozen such lines of 2-5 hex edges), and a line
+/// pinned through a chart where the part has no edge only costs the map.
+constexpr double kFeatureLineLength = 4.0;
 
 /// Mean value coordinates of point x w.r.t. the triangle (p1,p2,p3) of a closed star polyhedron around x
 /// (Ju, Schaefer, Warren 2005, as used by [FKR05] for the 3D Laplacian). Adds to w[0..2].
@@ -89,6 +96,7 @@ struct AxisInputs {
   /// boundary vertices, volume (3D) weights of the others.
   std::vector<std::map<int, double>> surf_w;
   std::vector<std::vector<std::pair<int, double>>> vol_w;
+  std::vector<FeatureLine> lines;  ///< creases inside a chart to put on lattice lines (feature_lines.h)
   double diag = 0, h = 0, min_d = 0, sigma = 0;
 };
 
@@ -297,7 +305,7 @@ std::vector<long> chart_levels(const AxisChartOrder& order, const PoissonStep& p
 /// Final solve "poisson": step 1's energy restricted to the free unknowns (the upper-left block of A),
 /// with the pinned groups moved to the right-hand side. Writes the free vertices of u.
 void final_poisson(const PoissonStep& ps, const std::vector<long>& k, const AxisInputs& in,
-                   const std::vector<int>& vgroup, Eigen::VectorXd& u) {
+                   const std::vector<int>& vgroup, const std::vector<double>& pin, Eigen::VectorXd& u) {
   const int nFree = ps.nFree, nV = int(u.size());
   const double h = in.h;
   std::vector<Eigen::Triplet<double>> tf;
@@ -312,12 +320,19 @@ void final_poisson(const PoissonStep& ps, const std::vector<long>& k, const Axis
       else if (cc >= nFree && r < nFree)
         b[r] -= it.value() * k[cc - nFree] * h;
     }
+  // pinned free vertices (feature lines): a stiff spring to their level, then set exactly
+  double stiff = 0;
+  for (const auto& t : tf) stiff = std::max(stiff, std::abs(t.value()));
+  stiff *= 1e8;
+  for (int v = 0; v < nV; ++v)
+    if (vgroup[v] < 0 && std::isfinite(pin[size_t(v)]))
+      tf.emplace_back(ps.var[v], ps.var[v], stiff), b[ps.var[v]] += stiff * pin[size_t(v)];
   Eigen::SparseMatrix<double> Af(nFree, nFree);
   Af.setFromTriplets(tf.begin(), tf.end());
   CholmodFactorization cf(Af);
   Eigen::VectorXd yf = cf.solve(b);
   for (int v = 0; v < nV; ++v)
-    if (vgroup[v] < 0) u[v] = yf[ps.var[v]];
+    if (vgroup[v] < 0) u[v] = std::isfinite(pin[size_t(v)]) ? pin[size_t(v)] : yf[ps.var[v]];
 }
 
 /// Final solve "mvc_laplace" (the paper): the mean value Laplace equation with the chart planes pinned.
@@ -327,8 +342,8 @@ void final_poisson(const PoissonStep& ps, const std::vector<long>& k, const Axis
 /// final_jacobi_iterations says why the diagonal one is not the default). Writes the free vertices of u.
 /// \throw SolverError for a vertex with zero weights, a system that cannot be preconditioned or a
 ///        solve that does not converge
-void final_mvc(const PoissonStep& ps, const AxisInputs& in, const std::vector<int>& vgroup, int a, Eigen::VectorXd& u,
-               PositionDeformStats& st) {
+void final_mvc(const PoissonStep& ps, const AxisInputs& in, const std::vector<int>& vgroup,
+               const std::vector<double>& pin, int a, Eigen::VectorXd& u, PositionDeformStats& st) {
   const int nFree = ps.nFree, nV = int(u.size());
   const std::vector<int>& var = ps.var;
   std::vector<Eigen::Triplet<double>> tf;
@@ -336,6 +351,11 @@ void final_mvc(const PoissonStep& ps, const AxisInputs& in, const std::vector<in
   for (int v = 0; v < nV; ++v) {
     if (vgroup[v] >= 0) continue;
     int r = var[v];
+    if (std::isfinite(pin[size_t(v)])) {  // a feature line's vertex: its level
+      tf.emplace_back(r, r, 1.0);
+      b[r] = pin[size_t(v)];
+      continue;
+    }
     double sum = 0;
     auto add = [&](int j, double w) {
       sum += w;
@@ -358,7 +378,7 @@ void final_mvc(const PoissonStep& ps, const AxisInputs& in, const std::vector<in
   Eigen::SparseMatrix<double, Eigen::RowMajor> Ar = Af;
   Eigen::VectorXd yf(nFree);
   for (int v = 0; v < nV; ++v)
-    if (vgroup[v] < 0) yf[var[v]] = ps.y[var[v]];
+    if (vgroup[v] < 0) yf[var[v]] = std::isfinite(pin[size_t(v)]) ? pin[size_t(v)] : ps.y[var[v]];
   constexpr double tol = 1e-12;
   bool done = false;
   if (in.p.final_jacobi_iterations > 0) {
@@ -397,7 +417,28 @@ void final_mvc(const PoissonStep& ps, const AxisInputs& in, const std::vector<in
 /// One axis a of §5.2 (steps 1-4 of the header): the a-coordinate of the map, out.U.col(a), and the
 /// planes of the a-charts, out.chart_plane. The three axes are independent (their own charts, Voronoi
 /// partition, Poisson and final systems) and run in parallel, each into its own statistics.
-void solve_axis(int a, const AxisInputs& in, PolyCubeMap& out, PositionDeformStats& st) {
+/// The levels of the feature lines across axis a (feature_lines.h): the rounded mean of their vertices'
+/// Poisson values, unless that is the level of an a-chart beside the line's chart (the line would lie on the
+/// chart's edge). Returns per vertex its pinned value (NaN: free) and appends the pinned vertices.
+std::vector<double> feature_line_pins(int a, const AxisInputs& in, const AxisChartOrder& order, const PoissonStep& ps,
+                                      const std::vector<long>& k, std::vector<int>& pinned, PositionDeformStats& st) {
+  std::vector<double> pin(in.input.V.rows(), std::numeric_limits<double>::quiet_NaN());
+  for (const FeatureLine& line : in.lines) {
+    if (line.axis != a) continue;
+    double mean = 0;
+    for (int v : line.vertices) mean += ps.y[ps.var[v]];
+    const long level = std::lround(mean / double(line.vertices.size()) / in.h);
+    bool clash = false;
+    for (int nb : in.chart_neighbours[size_t(line.chart)])
+      clash = clash || (label_axis(in.chart_label[size_t(nb)]) == a && k[order.chart_group[nb]] == level);
+    if (clash) continue;
+    for (int v : line.vertices) pin[size_t(v)] = double(level) * in.h, pinned.push_back(v);
+    ++st.feature_lines_pinned;
+  }
+  return pin;
+}
+
+void solve_axis(int a, const AxisInputs& in, PolyCubeMap& out, PositionDeformStats& st, std::vector<int>& pinned) {
   throw_if_interrupted();  // safe point: per axis
   const int nV = int(in.input.V.rows()), nC = int(in.seg.charts.size());
   const double h = in.h;
@@ -422,6 +463,7 @@ void solve_axis(int a, const AxisInputs& in, PolyCubeMap& out, PositionDeformSta
 
   const std::vector<long> k = chart_levels(order, ps, in, st);
   for (int ch : axis_charts) out.chart_plane[ch] = int(k[order.chart_group[ch]]);
+  const std::vector<double> pin = feature_line_pins(a, in, order, ps, k, pinned, st);
 
   // Final solve with the chart planes pinned.
   throw_if_interrupted();
@@ -432,9 +474,9 @@ void solve_axis(int a, const AxisInputs& in, PolyCubeMap& out, PositionDeformSta
     if (vgroup[v] >= 0) u[v] = k[vgroup[v]] * h;
   if (ps.nFree > 0) {
     if (in.p.final_solve == FinalSolve::poisson)
-      final_poisson(ps, k, in, vgroup, u);
+      final_poisson(ps, k, in, vgroup, pin, u);
     else
-      final_mvc(ps, in, vgroup, a, u, st);
+      final_mvc(ps, in, vgroup, pin, a, u, st);
   }
   out.U.col(a) = u;
   st.seconds_final += seconds_since(t0);
@@ -450,13 +492,15 @@ void merge_axes(const std::array<PositionDeformStats, 3>& axis_stats, PositionDe
 }
 
 /// Untangling (step 5, untangle_map.h): a vertex keeps the coordinates of the chart planes it lies on.
-void untangle(const TetMesh& input, const PolyCubeSegmentation& seg, const PositionDeformParams& p, RowMatrixX3d& U,
-              PositionDeformStats& st) {
+void untangle(const TetMesh& input, const PolyCubeSegmentation& seg, const PositionDeformParams& p,
+              const std::array<std::vector<int>, 3>& pinned, RowMatrixX3d& U, PositionDeformStats& st) {
   std::vector<std::uint8_t> fixed_axes(size_t(input.V.rows()), 0);
   for (Eigen::Index f = 0; f < seg.F.rows(); ++f) {
     const int a = label_axis(seg.charts[size_t(seg.chart[f])].label);
     for (int k = 0; k < 3; ++k) fixed_axes[size_t(seg.F(f, k))] |= std::uint8_t(1 << a);
   }
+  for (int a = 0; a < 3; ++a)  // and the feature lines' levels
+    for (int v : pinned[size_t(a)]) fixed_axes[size_t(v)] |= std::uint8_t(1 << a);
   MapUntangleParams up;
   up.max_iterations = p.untangle_iterations;
   up.rings = p.untangle_rings;
@@ -524,6 +568,10 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
   in.sigma = 3.0 * in.min_d;
   chart_incidence(in);
   if (p.final_solve == FinalSolve::mvc_laplace) mvc_weights(in);
+  if (p.feature_lines) {
+    in.lines = feature_lines(input.V, deformed.V, seg, kFeatureAngle, 0.5 * h, kFeatureLineLength * h, 0.5 * h);
+    st.feature_lines = int(in.lines.size());
+  }
 
   PolyCubeMap out;
   out.input = input_ptr;
@@ -533,11 +581,12 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
   out.chart_plane = Eigen::VectorXi::Zero(st.charts);
   report(0, "chart planes, Poisson and final solves");
   std::array<PositionDeformStats, 3> axis_stats{};
-  oneapi::tbb::parallel_for(0, 3, [&](int a) { solve_axis(a, in, out, axis_stats[size_t(a)]); });
+  std::array<std::vector<int>, 3> pinned;  // per axis: the feature lines' vertices pinned on it
+  oneapi::tbb::parallel_for(0, 3, [&](int a) { solve_axis(a, in, out, axis_stats[size_t(a)], pinned[size_t(a)]); });
   merge_axes(axis_stats, st);
   if (p.untangle_iterations > 0) {
     report(0.35, "untangling the map");
-    untangle(input, seg, p, out.U, st);
+    untangle(input, seg, p, pinned, out.U, st);
   }
   report(0.97, "distortion");
   measure_distortion(input, out.U, p, st);

@@ -25,10 +25,12 @@
 ///     (chart_order.h place_levels); "push_up": rounded, then each chart pushed up to one h above the
 ///     charts below it (a longest-path pass), which lets a stack of small charts carry the shift upwards.
 ///     The configs retry with push_up (tools/cli_run.h); docs/position_deform.md has the measurements.
-///  4. Final solve with the rounded chart coordinates pinned: `final_solve` = "mvc_laplace" (the paper:
-///     a Laplace equation discretised with mean value coordinates, 2D on the surface, 3D in the volume,
-///     weights computed on the deformed mesh) or "poisson" (step 1's energy with the charts pinned,
-///     which keeps more of the deformed shape).
+///  4. Final solve with the rounded chart coordinates pinned, and (beyond the paper, `feature_lines`) the
+///     creases that run inside a chart straight along an axis of its plane at the rounded mean of their
+///     other in-plane coordinate, so that the lattice has a line on them (feature_lines.h): `final_solve` =
+///     "mvc_laplace" (the paper: a Laplace equation discretised with mean value coordinates, 2D on the surface, 3D in
+///     the volume, weights computed on the deformed mesh) or "poisson" (step 1's energy with the charts pinned, which
+///     keeps more of the deformed shape).
 ///  5. Beyond the paper: the folds of the map (inverted tets) are untangled with the chart planes kept
 ///     (untangle_map.h), so that the hex stage maps every lattice point through a positive tet. Then
 ///     (`map_polish` "everywhere", default) the whole map descends the Winslow energy at ε -> 0 (a barrier:
@@ -77,7 +79,9 @@ struct PositionDeformParams {
   int map_polish_iterations = 200;  ///< L-BFGS iterations of that polish (0 = none), [0, 100000]
   MapPolishPreconditioner map_polish_preconditioner =
       MapPolishPreconditioner::none;  ///< none (plain L-BFGS) or laplacian (untangle_map.h polish_preconditioned)
-  double max_hexes = 2e7;  ///< refuse up front when the hex count estimate (volume / h³) exceeds this, [1e3, 2e9]
+  double max_hexes = 2e7;     ///< refuse up front when the hex count estimate (volume / h³) exceeds this, [1e3, 2e9]
+  bool feature_lines = true;  ///< creases inside a chart, straight along an axis of its plane, go onto lattice lines
+                              ///< (feature_lines.h; step 4)
 };
 
 struct PositionDeformStats {
@@ -96,9 +100,11 @@ struct PositionDeformStats {
       0;  ///< median conformal distortion ||J||_F ||J^-1||_F / 3 (input -> PolyCube) of non-inverted tets
   double distortion_p99 = 0;  ///< its 99th percentile
   double distortion_max = 0;
-  double planarity_error = 0;  ///< max distance of a chart vertex from its plane / bbox diagonal (0 by construction)
-  int final_iterations = 0;    ///< BiCGSTAB iterations of the mvc_laplace final solves (three axes)
-  int final_ilu_axes = 0;      ///< axes whose final solve used the incomplete LU preconditioner
+  double planarity_error = 0;    ///< max distance of a chart vertex from its plane / bbox diagonal (0 by construction)
+  int feature_lines = 0;         ///< creases inside a chart that can be lattice lines (feature_lines.h)
+  int feature_lines_pinned = 0;  ///< ... pinned at a level (not on the level of a chart beside theirs)
+  int final_iterations = 0;      ///< BiCGSTAB iterations of the mvc_laplace final solves (three axes)
+  int final_ilu_axes = 0;        ///< axes whose final solve used the incomplete LU preconditioner
   double seconds_poisson = 0, seconds_final = 0;  ///< summed over the three axes (which run in parallel)
 
   /// Report names, and how the three axes' figures merge (runtime/stat_fields.h).
@@ -114,7 +120,8 @@ struct PositionDeformStats {
         stat("chart_coordinates_rounded_max_shift", &S::chart_coordinates_rounded_max_shift, Combine::max),
         stat("inverted_tets", &S::inverted_tets), stat("untangle", &S::untangle), stat("distortion", &S::distortion),
         stat("distortion_p99", &S::distortion_p99), stat("distortion_max", &S::distortion_max),
-        stat("planarity_error", &S::planarity_error, Combine::max),
+        stat("planarity_error", &S::planarity_error, Combine::max), stat("feature_lines", &S::feature_lines),
+        stat("feature_lines_pinned", &S::feature_lines_pinned, Combine::sum),
         stat("final_iterations", &S::final_iterations, Combine::sum),
         stat("final_ilu_axes", &S::final_ilu_axes, Combine::sum),
         stat("seconds_poisson", &S::seconds_poisson, Combine::sum),

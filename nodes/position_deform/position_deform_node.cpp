@@ -44,7 +44,9 @@ const bool registered = register_node(
             .add_enum("map_polish_preconditioner", &P::map_polish_preconditioner,
                       {{MapPolishPreconditioner::none, "none"}, {MapPolishPreconditioner::laplacian, "laplacian"}},
                       "the polish's L-BFGS plain, or preconditioned by the map energy's stiffness (fewer iterations)")
-            .add("max_hexes", &P::max_hexes, "refuse up front when volume / h^3 exceeds this", 1e3, 2e9),
+            .add("max_hexes", &P::max_hexes, "refuse up front when volume / h^3 exceeds this", 1e3, 2e9)
+            .add("feature_lines", &P::feature_lines,
+                 "creases inside a chart, straight along an axis of its plane, are put on lattice lines"),
         {{"tets", artefact_name<TetMesh>()},
          {"deformed", artefact_name<TetMesh>()},
          {"segmentation", artefact_name<PolyCubeSegmentation>()}},
@@ -63,7 +65,7 @@ const bool registered = register_node(
                      " same-axis charts share a vertex and were put on one plane");
           return make_artefact(std::move(m));
         })
-        .with_version("5"));
+        .with_version("11"));
 
 // --save-all writes the PolyCube map as the tet mesh at its PolyCube positions (<id>.polycube.vtk) and
 // the PolyCube surface with chart ids and labels as cell data (<id>.polycube_surface.vtk).
