@@ -1,0 +1,128 @@
+// Sharp edges kept (issue 23), end to end with the default config: the built-in exact solids' creases on hex
+// edges, their corners on hex vertices, and the boundary within a fraction of a hex edge of the surface.
+#include "nodes/algorithms/features.h"
+#include "nodes/algorithms/hex_quality.h"
+#include "nodes/algorithms/shapes.h"
+#include "nodes/algorithms/triangle_tree.h"
+#include "nodes/formats/hexmesh_io.h"
+#include "tests/helpers/cli.h"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <functional>
+#include <vector>
+
+using json = nlohmann::json;
+namespace fs = std::filesystem;
+using namespace polyhex;
+
+namespace {
+
+struct Meshed {
+  json quality;  ///< the quality node's metrics
+  HexMesh mesh;
+  double h = 0;  ///< the hex edge, absolute (the quality node's median boundary edge)
+};
+
+Meshed mesh_shape(const std::string& shape, double hex_edge) {
+  const fs::path out = test::fresh_dir("sharp_" + shape);
+  const auto r =
+      test::run_polyhex("run " + std::string(POLYHEX_SOURCE_DIR) + "/configs/default.json -i shape:" + shape +
+                        " --hex-edge " + std::to_string(hex_edge) + " --threads 2 --no-cache --out " + out.string());
+  INFO(r.out);
+  REQUIRE(r.code == 0);
+  Meshed m;
+  m.quality = json::parse(test::read_text(out / "report.json"))["nodes"]["quality"]["metrics"];
+  m.mesh = read_hexmesh(out / "hex.vtk");
+  m.h = m.quality["hex_edge"].get<double>() * m.quality["bbox_diag"].get<double>();
+  return m;
+}
+
+/// The largest distance from the points of the polyline a -> b (every h / 100) where `keep` holds to the hex
+/// mesh's boundary edges.
+double line_to_edges(const HexMesh& m, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double h,
+                     const std::function<bool(const Eigen::Vector3d&)>& keep = {}) {
+  const auto Q = hex_boundary_quads(m);
+  double worst = 0;
+  const int n = std::max(1, int(std::ceil((b - a).norm() / (h / 100))));
+  for (int i = 0; i <= n; ++i) {
+    const Eigen::Vector3d p = a + (double(i) / n) * (b - a);
+    if (keep && !keep(p)) continue;
+    double best = 1e300;
+    for (Eigen::Index q = 0; q < Q.rows(); ++q)
+      for (int k = 0; k < 4; ++k)
+        best =
+            std::min(best, segment_distance(p, m.V.row(Q(q, k)).transpose(), m.V.row(Q(q, (k + 1) % 4)).transpose()));
+    worst = std::max(worst, best);
+  }
+  return worst;
+}
+
+}  // namespace
+
+TEST_CASE("sharp features: an L-block at h = 0.05 keeps every crease on hex edges, Hausdorff max <= 0.3 h",
+          "[features][cli]") {
+  const Meshed m = mesh_shape("sharp_l_block", 0.05);
+  CHECK(m.quality["inverted"] == 0);
+  CHECK(m.quality["hausdorff_max"].get<double>() <= 0.3 * m.quality["hex_edge"].get<double>());
+  // its 18 creases (feature_fidelity: the input's crease lines to the nearest boundary edge)
+  CHECK(m.quality["feature_curves"] == 18);
+  CHECK(m.quality["feature_curve_to_mesh_max"].get<double>() * m.quality["bbox_diag"].get<double>() <= 1e-3 * m.h);
+}
+
+TEST_CASE("sharp features: a box's 45 degree chamfer keeps both its creases on hex edges", "[features][cli]") {
+  const Meshed m = mesh_shape("chamfered_box", 0.04);
+  CHECK(m.quality["inverted"] == 0);
+  // the chamfer's creases run along y at (x, z) = (0.85, 0.4) (a chart boundary of the PolyCube) and (1, 0.25)
+  // (inside the chart that takes the chamfer: a lattice line of the map, feature_lines.h); away from their
+  // ends, where the lattice shears round the chamfer's corners, they lie on hex edges
+  auto middle = [&](const Eigen::Vector3d& p) { return p.y() > m.h && p.y() < 0.6 - m.h; };
+  CHECK(line_to_edges(m.mesh, {0.85, 0, 0.4}, {0.85, 0.6, 0.4}, m.h, middle) <= 1e-3 * m.h);
+  CHECK(line_to_edges(m.mesh, {1, 0, 0.25}, {1, 0.6, 0.25}, m.h, middle) <= 1e-3 * m.h);
+  CHECK(m.quality["hausdorff_max"].get<double>() <= 0.5 * m.quality["hex_edge"].get<double>());
+}
+
+TEST_CASE("sharp features: a filleted cylinder's sharp rim is on hex edges, its fillet smooth", "[features][cli]") {
+  const Meshed m = mesh_shape("filleted_cylinder", 0.03);
+  CHECK(m.quality["inverted"] == 0);
+  // the rim (radius R = 0.3 at z = 0.5) is the only crease: the fillet has none
+  CHECK(m.quality["feature_curves"].get<int>() >= 1);
+  // hex vertices on the rim (within 1e-3 h of the input's rim polygon), their edges chords of it: every point
+  // of the rim is within a chord's sagitta L^2 / (8 R) of the boundary edges (L the longest chord), plus 1e-3 h
+  const double R = 0.3;
+  const SurfaceCreases rim = find_creases(make_shape({"filleted_cylinder", 64}), kFeatureAngle, 0);
+  REQUIRE(rim.lines.size() == 1);
+  auto on_rim = [&](const Eigen::Vector3d& x) { return (closest_on_line(rim.lines[0], x) - x).norm() <= 1e-3 * m.h; };
+  const auto Q = hex_boundary_quads(m.mesh);
+  double longest = 0;
+  long rim_vertices = 0;
+  std::vector<char> seen(size_t(m.mesh.V.rows()), 0);
+  for (Eigen::Index q = 0; q < Q.rows(); ++q)
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Vector3d a = m.mesh.V.row(Q(q, k)).transpose(), b = m.mesh.V.row(Q(q, (k + 1) % 4)).transpose();
+      if (on_rim(a) && !seen[size_t(Q(q, k))]) seen[size_t(Q(q, k))] = 1, ++rim_vertices;
+      if (on_rim(a) && on_rim(b)) longest = std::max(longest, (b - a).norm());
+    }
+  CHECK(rim_vertices >= long(2 * M_PI * R / (1.5 * m.h)));
+  // ... but at the top chart's four corners: the PolyCube puts a lattice corner where the rim runs on, and the
+  // quad there must leave it (creases_at_vertices); at most 2 h of rim each, within a quarter hex edge
+  const double bound = longest * longest / (8 * R) + 1e-3 * m.h;
+  double off = 0, worst = 0;
+  const auto& line = rim.lines[0];
+  for (size_t i = 1; i < line.size(); ++i) {  // the rim's length farther than the bound, h / 20 at a time
+    const double len = (line[i] - line[i - 1]).norm();
+    const int n = int(std::ceil(len / (m.h / 20)));
+    for (int k = 0; k < n; ++k) {
+      const Eigen::Vector3d p = line[i - 1] + ((k + 0.5) / n) * (line[i] - line[i - 1]);
+      const double d = line_to_edges(m.mesh, p, p, m.h);
+      worst = std::max(worst, d);
+      if (d > bound) off += len / n;
+    }
+  }
+  CHECK(off <= 4 * 2 * m.h);
+  CHECK(worst <= 0.25 * m.h);
+  // the fillet is smooth: no hex feature edge far from the rim (mesh -> curve within a hex edge)
+  CHECK(m.quality["feature_mesh_to_curve_max"].get<double>() * m.quality["bbox_diag"].get<double>() <= m.h);
+}
