@@ -359,6 +359,124 @@ SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double
   return out;
 }
 
+CreaseFaces crease_faces(const SurfaceMesh& surface, const SurfaceCreases& creases) {
+  const auto& V = surface.V;
+  const auto& F = surface.F;
+  const int nf = int(F.rows());
+  const std::vector<std::array<int, 2>> on_line = crease_edges(creases);
+  std::vector<int> parent(static_cast<size_t>(nf));
+  for (int f = 0; f < nf; ++f) parent[size_t(f)] = f;
+  auto find = [&](int f) {
+    while (parent[size_t(f)] != f) f = parent[size_t(f)] = parent[size_t(parent[size_t(f)])];
+    return f;
+  };
+  for (const ManifoldEdge& e : manifold_edges(surface, 90.0))
+    if (!std::binary_search(on_line.begin(), on_line.end(),
+                            std::array<int, 2>{std::min(e.a, e.b), std::max(e.a, e.b)})) {
+      const int r0 = find(e.f0), r1 = find(e.f1);
+      if (r0 != r1) parent[size_t(std::max(r0, r1))] = std::min(r0, r1);
+    }
+  CreaseFaces out;
+  out.patch.resize(nf);
+  std::vector<int> id(static_cast<size_t>(nf), -1);
+  for (int f = 0; f < nf; ++f) {
+    const int r = find(f);
+    if (id[size_t(r)] < 0) id[size_t(r)] = out.faces++;
+    out.patch[f] = id[size_t(r)];
+  }
+  std::vector<Vec3> normal(static_cast<size_t>(nf)), mean(size_t(out.faces), Vec3::Zero());
+  for (int f = 0; f < nf; ++f) {
+    const Vec3 n = (V.row(F(f, 1)) - V.row(F(f, 0))).cross(V.row(F(f, 2)) - V.row(F(f, 0))).transpose();
+    normal[size_t(f)] = n.norm() > 0 ? Vec3(n.normalized()) : Vec3::Zero();
+    mean[size_t(out.patch[f])] += n;
+  }
+  for (auto& m : mean)
+    if (m.norm() > 0) m.normalize();
+  out.planar.assign(size_t(out.faces), 1);
+  const double cos_max = std::cos(kPlanarFace * M_PI / 180.0);
+  for (int f = 0; f < nf; ++f)
+    if (normal[size_t(f)].dot(mean[size_t(out.patch[f])]) < cos_max) out.planar[size_t(out.patch[f])] = 0;
+  return out;
+}
+
+std::vector<char> flat_face_triangles(const SurfaceMesh& surface, double h) {
+  const auto& V = surface.V;
+  const auto& F = surface.F;
+  const int nf = int(F.rows());
+  std::vector<Vec3> normal(static_cast<size_t>(nf));
+  std::vector<double> area(static_cast<size_t>(nf));
+  for (int f = 0; f < nf; ++f) {
+    const Vec3 n = (V.row(F(f, 1)) - V.row(F(f, 0))).cross(V.row(F(f, 2)) - V.row(F(f, 0))).transpose();
+    area[size_t(f)] = 0.5 * n.norm();
+    normal[size_t(f)] = n.norm() > 0 ? Vec3(n.normalized()) : Vec3::Zero();
+  }
+  std::vector<std::vector<int>> nbrs(static_cast<size_t>(nf));
+  for (const ManifoldEdge& e : manifold_edges(surface, 90.0))
+    nbrs[size_t(e.f0)].push_back(e.f1), nbrs[size_t(e.f1)].push_back(e.f0);
+  std::vector<int> order(static_cast<size_t>(nf));
+  for (int f = 0; f < nf; ++f) order[size_t(f)] = f;
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return area[size_t(a)] > area[size_t(b)]; });
+  const double cos_max = std::cos(kPlanarFace * M_PI / 180.0);
+  std::vector<int> region(static_cast<size_t>(nf), -1);
+  std::vector<char> flat(static_cast<size_t>(nf), 0);
+  std::vector<int> members, stack;
+  int n = 0;
+  for (int seed : order) {
+    if (region[size_t(seed)] >= 0 || area[size_t(seed)] <= 0) continue;
+    const Vec3 axis = normal[size_t(seed)];
+    members.assign(1, seed);
+    stack.assign(1, seed);
+    region[size_t(seed)] = n;
+    double total = 0;
+    while (!stack.empty()) {
+      const int f = stack.back();
+      stack.pop_back();
+      total += area[size_t(f)];
+      for (int g : nbrs[size_t(f)])
+        if (region[size_t(g)] < 0 && normal[size_t(g)].dot(axis) >= cos_max)
+          region[size_t(g)] = n, stack.push_back(g), members.push_back(g);
+    }
+    if (total >= kFlatFaceArea * h * h)
+      for (int f : members) flat[size_t(f)] = 1;
+    ++n;
+  }
+  return flat;
+}
+
+SurfaceCreases flat_face_creases(const SurfaceMesh& surface, const SurfaceCreases& creases, double h) {
+  const std::vector<char> flat = flat_face_triangles(surface, h);
+  const Eigen::Index nv = surface.V.rows();
+  std::unordered_map<long long, char> beside_flat;  // each edge: a triangle on a flat face beside it
+  for (Eigen::Index f = 0; f < surface.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = surface.F(f, k), b = surface.F(f, (k + 1) % 3);
+      beside_flat[(long long)std::min(a, b) * nv + std::max(a, b)] |= flat[size_t(f)];
+    }
+  SurfaceCreases out;
+  std::vector<int> corner(creases.corners.size(), -1);
+  auto keep_corner = [&](int c) {
+    if (c < 0) return -1;
+    if (corner[size_t(c)] < 0)
+      corner[size_t(c)] = int(out.corners.size()), out.corners.push_back(creases.corners[size_t(c)]);
+    return corner[size_t(c)];
+  };
+  for (size_t l = 0; l < creases.lines.size(); ++l) {
+    const auto& vs = creases.vertices[l];
+    size_t along = 0;
+    for (size_t k = 1; k < vs.size(); ++k) {
+      const auto it = beside_flat.find((long long)std::min(vs[k - 1], vs[k]) * nv + std::max(vs[k - 1], vs[k]));
+      along += it != beside_flat.end() && it->second;
+    }
+    if (2 * along <= vs.size() - 1) continue;
+    out.lines.push_back(creases.lines[l]);
+    out.vertices.push_back(vs);
+    out.closed.push_back(creases.closed[l]);
+    out.start_corner.push_back(keep_corner(creases.start_corner[l]));
+    out.end_corner.push_back(keep_corner(creases.end_corner[l]));
+  }
+  return out;
+}
+
 std::vector<std::array<int, 2>> crease_edges(const SurfaceCreases& creases) {
   std::vector<std::array<int, 2>> out;
   for (const auto& l : creases.vertices)

@@ -28,6 +28,38 @@ struct SurfaceCreases {
   std::vector<std::vector<int>> vertices;           ///< per line: its surface vertex ids (as `lines`)
 };
 
+/// A part's faces: the surface between its crease lines.
+struct CreaseFaces {
+  Eigen::VectorXi patch;     ///< #F face of each triangle (triangles joined across edges on no line)
+  int faces = 0;             ///< number of faces
+  std::vector<char> planar;  ///< per face: its triangles' normals within kPlanarFace degrees of their mean
+};
+
+/// A face is planar when its triangles' normals lie within this many degrees of their area-weighted mean.
+inline constexpr double kPlanarFace = 10.0;
+
+/// The faces between the crease lines of a surface.
+/// \pre creases from find_creases on this surface
+CreaseFaces crease_faces(const SurfaceMesh& surface, const SurfaceCreases& creases);
+
+/// The triangles on a flat face of a part: connected regions whose normals stay within kPlanarFace degrees of their
+/// first (largest) triangle's, of at least kFlatFaceArea h^2 (a face a few hexes can sit on); grown from the
+/// largest triangles first.
+/// \param h  the hex edge, absolute, > 0
+/// \return #F flags
+std::vector<char> flat_face_triangles(const SurfaceMesh& surface, double h);
+
+/// Area of a flat face, in hex faces (h^2).
+inline constexpr double kFlatFaceArea = 4.0;
+
+/// The crease lines that run along a flat face (flat_face_triangles): most of a line's edges have a triangle of
+/// one on a side. A part's edges do (its planes, and the large near-flat pieces of its cylinders and twisted
+/// faces); a scan's faceting that passes find_creases' scale test sits between facets as large as a hex edge that
+/// turn by more than kPlanarFace from one to the next, and does not; nor does an edge between two strongly
+/// curved faces. Corners are those the kept lines end at.
+/// \pre creases from find_creases on this surface; h > 0
+SurfaceCreases flat_face_creases(const SurfaceMesh& surface, const SurfaceCreases& creases, double h);
+
 /// The surface edges of the crease lines, (low, high) vertex pairs, sorted.
 std::vector<std::array<int, 2>> crease_edges(const SurfaceCreases& creases);
 

@@ -94,7 +94,7 @@ class Optimizer {
     if (creases != Creases::none && p_.feature_angle > 0 && p_.move_boundary && Q.rows() > 0) {
       const double h = median_boundary_edge(V_, Q);  // the hex edge length
       if (creases == Creases::at_vertices) {
-        creases_ = find_creases(surface, p_.feature_angle, 1.5 * h, 0.5 * h);
+        creases_ = flat_face_creases(surface, find_creases(surface, p_.feature_angle, 1.5 * h, 0.5 * h), h);
         snap_ = creases_at_vertices(V_, Q, creases_, kOnCrease * h);
         free_padded_creases(Q, h);
       } else {

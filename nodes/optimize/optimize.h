@@ -55,7 +55,8 @@ struct OptimizeParams {
                       ///< crease handling; if the first result is poor (fallback_below_sj), a second candidate puts
                       ///< paths of boundary edges on the crease lines, [0, 179]
   bool keep_creases = true;        ///< boundary vertices the lattice put on a crease of the surface (sharper than
-                                   ///< feature_angle at half a hex edge) slide along it, those at its corners stay
+                                   ///< feature_angle at half a hex edge, along a flat face: features.h
+                                   ///< flat_face_creases) slide along it, those at its corners stay
                                    ///< (features.h creases_at_vertices; under a padding layer on both sides of the
                                    ///< crease they stay within a quarter hex edge of it instead)
   double fallback_below_sj = 0.5;  ///< with a fallback mesh: also optimize it when the first result's minimum scaled

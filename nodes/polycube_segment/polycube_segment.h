@@ -46,7 +46,8 @@ struct PolyCubeSegmentParams {
                                     ///< of §5.1, below); either 0 = off, [0, 100] each
   int fallback_retries = 2;    ///< if invalid, retry with doubled smoothing this many times (reported as a warning)
   bool follow_creases = true;  ///< with the input tets: normals are not smoothed across the input's creases (sharp at
-                               ///< half a hex edge), and each planar face between creases takes one label (beyond §5.1)
+                               ///< half a hex edge, along a flat face: features.h flat_face_creases), and each planar
+                               ///< face between creases takes one label (beyond §5.1)
   bool allow_invalid = false;  ///< pass an invalid structure on with a warning instead of failing
   bool save_surface = false;   ///< write <id>.charts.vtk (also written with --save-all)
 };

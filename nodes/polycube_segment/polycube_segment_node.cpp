@@ -85,7 +85,7 @@ const bool registered = register_node(
           }
           return make_artefact(std::make_shared<const PolyCubeSegmentation>(std::move(s)));
         })
-        .with_version("11"));
+        .with_version("12"));
 
 }  // namespace
 }  // namespace polyhex

@@ -56,17 +56,14 @@ std::vector<Vec3> smoothed_normals(const Surface& s, int iterations,
                                    const std::vector<std::array<char, 3>>* crease = nullptr);
 
 /// The input's creases on the segmented surface (beyond §5.1, issue 23): per triangle which of its edges are
-/// creases of the input (sharp at half a hex edge, features.h), and the patches they bound.
+/// creases of the input (sharp at half a hex edge and along a flat face, features.h flat_face_creases), and the
+/// faces between all its creases (crease_faces).
 struct InputCreases {
   std::vector<std::array<char, 3>> edge;  ///< #F by 3: edge k of triangle t (vertices k, k+1) is a crease
-  std::vector<int> patch;                 ///< #F: patch id, triangles joined across edges that are not creases
+  std::vector<int> patch;                 ///< #F: the input's face (crease_faces, features.h)
   int patches = 0;
-  std::vector<char> planar;  ///< per patch: the input's normals within kPlanarPatch degrees of their mean
+  std::vector<char> planar;  ///< per patch: the input's normals within kPlanarFace degrees of their mean
 };
-
-/// A patch of the input is planar (one label for all of it) when its triangles' normals lie within this many
-/// degrees of their area-weighted mean.
-inline constexpr double kPlanarPatch = 10.0;
 
 /// The creases of the input tet mesh's boundary (same triangles as the segmented surface).
 /// \param X  the input's vertices (the deformed surface's rest positions)  \param h  the hex edge, absolute

@@ -99,52 +99,25 @@ std::vector<Vec3> smoothed_normals(const Surface& s, int iterations, const std::
 }
 
 InputCreases input_creases(const Surface& s, const RowMatrixX3d& X, double h) {
-  InputCreases c;
-  const int nf = s.nf();
   SurfaceMesh surface;
   surface.V = X;
   surface.F = *s.F;
-  const std::vector<std::array<int, 2>> sharp = crease_edges(find_creases(surface, kFeatureAngle, 1.5 * h, 0.5 * h));
+  const SurfaceCreases all = find_creases(surface, kFeatureAngle, 1.5 * h, 0.5 * h);
+  CreaseFaces faces = crease_faces(surface, all);
+  InputCreases c;
+  c.patch.assign(faces.patch.data(), faces.patch.data() + faces.patch.size());
+  c.patches = faces.faces;
+  c.planar = std::move(faces.planar);
+  // a barrier to the normals' smoothing is a crease along a flat face, not a scan's faceting
+  const std::vector<std::array<int, 2>> part = crease_edges(flat_face_creases(surface, all, h));
+  const int nf = s.nf();
   c.edge.assign(size_t(nf), {0, 0, 0});
   for (int t = 0; t < nf; ++t)
     for (int k = 0; k < 3; ++k) {
       const int a = (*s.F)(t, k), b = (*s.F)(t, (k + 1) % 3);
       c.edge[size_t(t)][size_t(k)] =
-          std::binary_search(sharp.begin(), sharp.end(), std::array<int, 2>{std::min(a, b), std::max(a, b)});
+          std::binary_search(part.begin(), part.end(), std::array<int, 2>{std::min(a, b), std::max(a, b)});
     }
-  // patches: flood fill across edges that are not creases (tri_nbrs[t][k] is across edge k)
-  c.patch.assign(size_t(nf), -1);
-  std::vector<int> stack;
-  for (int t0 = 0; t0 < nf; ++t0) {
-    if (c.patch[size_t(t0)] >= 0) continue;
-    c.patch[size_t(t0)] = c.patches;
-    stack.assign(1, t0);
-    while (!stack.empty()) {
-      const int t = stack.back();
-      stack.pop_back();
-      for (int k = 0; k < 3; ++k) {
-        const int u = s.tri_nbrs[t][k];
-        if (!c.edge[size_t(t)][size_t(k)] && c.patch[size_t(u)] < 0) c.patch[size_t(u)] = c.patches, stack.push_back(u);
-      }
-    }
-    ++c.patches;
-  }
-  // planar patches: the input normals' spread round their mean
-  std::vector<Vec3> mean(size_t(c.patches), Vec3::Zero());
-  std::vector<Vec3> normal(static_cast<size_t>(nf));
-  for (int t = 0; t < nf; ++t) {
-    const Vec3 a = X.row((*s.F)(t, 0)).transpose(), b = X.row((*s.F)(t, 1)).transpose(),
-               d = X.row((*s.F)(t, 2)).transpose();
-    const Vec3 n = (b - a).cross(d - a);
-    normal[size_t(t)] = n.norm() > 0 ? Vec3(n.normalized()) : Vec3::Zero();
-    mean[size_t(c.patch[size_t(t)])] += n;
-  }
-  c.planar.assign(size_t(c.patches), 1);
-  const double cos_max = std::cos(kPlanarPatch * M_PI / 180.0);
-  for (auto& m : mean)
-    if (m.norm() > 0) m.normalize();
-  for (int t = 0; t < nf; ++t)
-    if (normal[size_t(t)].dot(mean[size_t(c.patch[size_t(t)])]) < cos_max) c.planar[size_t(c.patch[size_t(t)])] = 0;
   return c;
 }
 

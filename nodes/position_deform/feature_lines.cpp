@@ -25,7 +25,8 @@ std::vector<FeatureLine> feature_lines(const RowMatrixX3d& X, const RowMatrixX3d
     }
   // per chart, its crease edges as a graph
   std::map<int, std::map<int, std::vector<int>>> graph;  // chart -> vertex -> neighbours
-  for (const auto& e : crease_edges(find_creases(surface, angle_deg, min_length, scale))) {
+  for (const auto& e :
+       crease_edges(flat_face_creases(surface, find_creases(surface, angle_deg, min_length, scale), 2 * scale))) {
     const auto it = edge_charts.find(e);
     if (it == edge_charts.end() || it->second[0] < 0 || it->second[0] != it->second[1]) continue;
     auto& g = graph[it->second[0]];

@@ -22,7 +22,8 @@ struct FeatureLine {
   double length = 0;          ///< on the input surface
 };
 
-/// The creases of a segmented surface that run inside one chart (both triangles of each edge in the chart),
+/// The creases of a segmented surface (those along a flat face, features.h flat_face_creases) that run inside one
+/// chart (both triangles of each edge in the chart),
 /// joined into runs (split where three or more such edges meet), that can be lattice lines: at least
 /// `min_length` long, straight in the input (within `tolerance` of the segment between its ends) and in the
 /// deformed mesh along an axis of the chart's plane (within `tolerance` across it).

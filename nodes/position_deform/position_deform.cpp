@@ -561,7 +561,7 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
   const double h = p.edge_length * diag;
   check_budget(input, p, h);
   const TetEdgeGraph graph(input.T, int(input.V.rows()));
-  AxisInputs in{input, deformed.V, seg, p, graph, {}, {}, {}, {}, {}, {}};
+  AxisInputs in{input, deformed.V, seg, p, graph, {}, {}, {}, {}, {}, {}, {}};
   in.diag = diag;
   in.h = h;
   in.min_d = 2.0 * h;

@@ -65,7 +65,7 @@ const bool registered = register_node(
                      " same-axis charts share a vertex and were put on one plane");
           return make_artefact(std::move(m));
         })
-        .with_version("11"));
+        .with_version("12"));
 
 // --save-all writes the PolyCube map as the tet mesh at its PolyCube positions (<id>.polycube.vtk) and
 // the PolyCube surface with chart ids and labels as cell data (<id>.polycube_surface.vtk).

@@ -123,4 +123,28 @@ inline SurfaceMesh box12(double a, double b, double c, const std::string& source
   return m;
 }
 
+/// A closed cylinder of radius r and height z with n side segments (a prism, its side faces 2 r sin(pi / n) wide);
+/// caps are fans around a centre vertex.
+inline SurfaceMesh fan_cylinder(int n, double r = 1, double z = 2) {
+  SurfaceMesh s;
+  s.source = "cylinder";
+  s.V.resize(2 * n + 2, 3);
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * M_PI * i / n;
+    s.V.row(i) << r * std::cos(a), r * std::sin(a), 0;
+    s.V.row(n + i) << r * std::cos(a), r * std::sin(a), z;
+  }
+  s.V.row(2 * n) << 0, 0, 0;
+  s.V.row(2 * n + 1) << 0, 0, z;
+  s.F.resize(4 * n, 3);
+  for (int i = 0; i < n; ++i) {
+    const int j = (i + 1) % n;
+    s.F.row(4 * i) << i, j, n + j;
+    s.F.row(4 * i + 1) << i, n + j, n + i;
+    s.F.row(4 * i + 2) << 2 * n, j, i;
+    s.F.row(4 * i + 3) << 2 * n + 1, n + i, n + j;
+  }
+  return s;
+}
+
 }  // namespace polyhex::test

@@ -3,38 +3,17 @@
 #include "nodes/algorithms/hex_quality.h"
 #include "nodes/optimize/optimize.h"
 #include "runtime/errors.h"
+#include "tests/helpers/surface_checks.h"
 #include "tests/helpers/voxel_maps.h"
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 using namespace polyhex;
 
 namespace {
-
-/// A closed cylinder of radius 1 and height 2 with n side segments; caps are fans around a centre vertex.
-SurfaceMesh cylinder(int n) {
-  SurfaceMesh s;
-  s.source = "cylinder";
-  s.V.resize(2 * n + 2, 3);
-  for (int i = 0; i < n; ++i) {
-    const double a = 2 * M_PI * i / n;
-    s.V.row(i) << std::cos(a), std::sin(a), 0;
-    s.V.row(n + i) << std::cos(a), std::sin(a), 2;
-  }
-  s.V.row(2 * n) << 0, 0, 0;
-  s.V.row(2 * n + 1) << 0, 0, 2;
-  s.F.resize(4 * n, 3);
-  for (int i = 0; i < n; ++i) {
-    const int j = (i + 1) % n;
-    s.F.row(4 * i) << i, j, n + j;
-    s.F.row(4 * i + 1) << i, n + j, n + i;
-    s.F.row(4 * i + 2) << 2 * n, j, i;
-    s.F.row(4 * i + 3) << 2 * n + 1, n + i, n + j;
-  }
-  return s;
-}
 
 bool on_box_edge(const Eigen::Vector3d& x, double n) {
   int at = 0;
@@ -61,7 +40,7 @@ TEST_CASE("find_creases: a box has 12 open crease lines between 8 corners; a cyl
   CHECK(find_creases(box, 95, 0.5).lines.empty());  // the box's dihedral angles are 90 degrees
   CHECK(find_creases(box, 40, 3.5).lines.empty());  // every line is 3 long
 
-  const SurfaceCreases r = find_creases(cylinder(24), 40, 0.5);  // side edges bend by 15 degrees only
+  const SurfaceCreases r = find_creases(test::fan_cylinder(24), 40, 0.5);  // side edges bend by 15 degrees only
   REQUIRE(r.lines.size() == 2);
   CHECK(r.corners.empty());
   for (size_t l = 0; l < 2; ++l) {
@@ -69,7 +48,7 @@ TEST_CASE("find_creases: a box has 12 open crease lines between 8 corners; a cyl
     CHECK(r.lines[l].size() == 25);
     CHECK((r.lines[l].front() - r.lines[l].back()).norm() < 1e-12);
   }
-  CHECK(find_creases(cylinder(24), 10, 0.5).lines.size() > 2);  // now the side edges are sharp too
+  CHECK(find_creases(test::fan_cylinder(24), 10, 0.5).lines.size() > 2);  // now the side edges are sharp too
 
   SurfaceMesh bad = box;
   bad.F(0, 1) = int(bad.V.rows());
@@ -239,4 +218,53 @@ TEST_CASE("creases_at_vertices: a vertex where the lattice crosses a crease stay
   CHECK(snap.line[1] == 0);
   CHECK(snap.line[4] == 0);
   CHECK(snap.vertices == 2);
+}
+
+TEST_CASE("crease_faces: a box's lines bound its six planar faces; without one line two of them are one",
+          "[features]") {
+  const SurfaceMesh box = test::voxel_surface(test::voxel_box(4, 4, 4));
+  const SurfaceCreases c = find_creases(box, 40, 0.5);
+  const CreaseFaces faces = crease_faces(box, c);
+  CHECK(faces.faces == 6);
+  CHECK(std::count(faces.planar.begin(), faces.planar.end(), 1) == 6);
+  SurfaceCreases cut = c;
+  cut.lines.erase(cut.lines.begin());
+  cut.vertices.erase(cut.vertices.begin());
+  cut.closed.erase(cut.closed.begin());
+  cut.start_corner.erase(cut.start_corner.begin());
+  cut.end_corner.erase(cut.end_corner.begin());
+  const CreaseFaces merged = crease_faces(box, cut);
+  CHECK(merged.faces == 5);
+  CHECK(std::count(merged.planar.begin(), merged.planar.end(), 1) == 4);
+}
+
+TEST_CASE("flat_face_creases: a box keeps its 12 lines; a sphere faceted at the hex scale keeps none", "[features]") {
+  const SurfaceMesh box = test::voxel_surface(test::voxel_box(4, 4, 4));
+  const std::vector<char> flat = flat_face_triangles(box, 1.0);
+  CHECK(std::count(flat.begin(), flat.end(), 1) == Eigen::Index(flat.size()));
+  const SurfaceCreases kept = flat_face_creases(box, find_creases(box, 40, 0.5), 1.0);
+  CHECK(kept.lines.size() == 12);
+  CHECK(kept.corners.size() == 8);
+  const std::vector<char> small = flat_face_triangles(box, 2.01);  // a 4 x 4 face is less than 4 h^2
+  CHECK(std::count(small.begin(), small.end(), 1) == 0);
+
+  // an octagonal prism of radius 2.2 and height 1.6 at a hex edge h = 1 (surface split to triangles of about h / 4
+  // by TetGen): its side faces (1.68 x 1.6 = 2.7 h^2) are too small to be flat faces, so the edges between them
+  // (45 degrees) are no part's creases, as a scan's facets as large as a hex edge; its caps (13.7 h^2) are flat
+  // faces, and their rims are kept
+  TetgenParams tp;
+  tp.edge_length = 0.06;
+  const TetMesh tets = tetrahedralize(test::fan_cylinder(8, 2.2, 1.6), tp);
+  SurfaceMesh prism;
+  prism.V = tets.V;
+  prism.F = boundary_triangles(tets);
+  const SurfaceCreases lines = find_creases(prism, 40, 1.5, 0.5);
+  REQUIRE(lines.lines.size() == 8 + 16);
+  const SurfaceCreases rims = flat_face_creases(prism, lines, 1.0);
+  CHECK(rims.lines.size() == 16);
+  for (const auto& l : rims.lines)
+    for (const auto& p : l)
+      CHECK((std::abs(p.z()) < 1e-9 || std::abs(p.z() - 1.6) < 1e-9));  // TetGen's points to rounding
+  // at a hex edge of 0.5 the side faces are flat faces too, and every line is kept
+  CHECK(flat_face_creases(prism, lines, 0.5).lines.size() == 24);
 }
