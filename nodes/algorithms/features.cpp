@@ -25,6 +25,27 @@ double line_length(const std::vector<Vec3>& line) {
   return L;
 }
 
+/// A key of the undirected edge (a, b) of a surface with nv vertices.
+long long edge_key(int a, int b, long long nv) { return (long long)std::min(a, b) * nv + std::max(a, b); }
+
+/// Per triangle its normal times twice its area (the cross product of two of its edges).
+std::vector<Vec3> area_normals(const SurfaceMesh& surface) {
+  const auto& V = surface.V;
+  const auto& F = surface.F;
+  std::vector<Vec3> out(size_t(F.rows()));
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    out[size_t(f)] = (V.row(F(f, 1)) - V.row(F(f, 0))).cross(V.row(F(f, 2)) - V.row(F(f, 0))).transpose();
+  return out;
+}
+
+/// Per triangle its unit normal (zero for a degenerate one), from area_normals.
+std::vector<Vec3> unit_normals(const std::vector<Vec3>& area_normal) {
+  std::vector<Vec3> out(area_normal.size(), Vec3::Zero());
+  for (size_t f = 0; f < area_normal.size(); ++f)
+    if (area_normal[f].norm() > 0) out[f] = area_normal[f].normalized();
+  return out;
+}
+
 /// The point at arc length `s` along the line.
 Vec3 point_at(const std::vector<Vec3>& line, double s) {
   for (size_t k = 1; k < line.size(); ++k) {
@@ -148,12 +169,7 @@ std::vector<ManifoldEdge> manifold_edges(const SurfaceMesh& surface, double angl
       if (F(f, k) < 0 || F(f, k) >= nv)
         throw InvalidInput(surface.source + ": triangle " + std::to_string(f) + " has vertex index " +
                            std::to_string(F(f, k)) + " outside 0.." + std::to_string(nv - 1));
-  std::vector<Vec3> normal(size_t(F.rows()), Vec3::Zero()), area_normal(size_t(F.rows()));
-  for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const Vec3 n = (V.row(F(f, 1)) - V.row(F(f, 0))).cross(V.row(F(f, 2)) - V.row(F(f, 0))).transpose();
-    area_normal[size_t(f)] = n;
-    if (n.norm() > 0) normal[size_t(f)] = n.normalized();
-  }
+  const std::vector<Vec3> area_normal = area_normals(surface), normal = unit_normals(area_normal);
   // edges as (low, high, face), sorted: an interior manifold edge appears twice
   std::vector<std::array<int, 3>> half;
   half.reserve(size_t(F.rows()) * 3);
@@ -180,6 +196,32 @@ std::vector<ManifoldEdge> manifold_edges(const SurfaceMesh& surface, double angl
   return out;
 }
 
+/// The connected components of `nf` triangles joined across the edges for which `join(edge)` holds, numbered
+/// 0.. in the order of each component's lowest triangle. \param count  out: the number of components
+template <class Join>
+Eigen::VectorXi join_triangles(int nf, const std::vector<ManifoldEdge>& edges, const Join& join, int& count) {
+  std::vector<int> parent(static_cast<size_t>(nf));
+  for (int f = 0; f < nf; ++f) parent[size_t(f)] = f;
+  auto find = [&](int f) {
+    while (parent[size_t(f)] != f) f = parent[size_t(f)] = parent[size_t(parent[size_t(f)])];
+    return f;
+  };
+  for (const ManifoldEdge& e : edges)
+    if (join(e)) {
+      const int r0 = find(e.f0), r1 = find(e.f1);
+      if (r0 != r1) parent[size_t(std::max(r0, r1))] = std::min(r0, r1);  // the root is the lowest triangle
+    }
+  Eigen::VectorXi component(nf);
+  std::vector<int> id(static_cast<size_t>(nf), -1);
+  count = 0;
+  for (int f = 0; f < nf; ++f) {
+    const int r = find(f);
+    if (id[size_t(r)] < 0) id[size_t(r)] = count++;
+    component[f] = id[size_t(r)];
+  }
+  return component;
+}
+
 }  // namespace
 
 std::vector<std::array<int, 2>> sharp_edges(const SurfaceMesh& surface, double angle_deg, double scale) {
@@ -190,27 +232,9 @@ std::vector<std::array<int, 2>> sharp_edges(const SurfaceMesh& surface, double a
 }
 
 Eigen::VectorXi surface_patches(const SurfaceMesh& surface, double angle_deg, int* patches) {
-  const std::vector<ManifoldEdge> edges = manifold_edges(surface, angle_deg);
-  const int nf = int(surface.F.rows());
-  std::vector<int> parent(static_cast<size_t>(nf));
-  for (int f = 0; f < nf; ++f) parent[size_t(f)] = f;
-  auto find = [&](int f) {
-    while (parent[size_t(f)] != f) f = parent[size_t(f)] = parent[size_t(parent[size_t(f)])];
-    return f;
-  };
-  for (const ManifoldEdge& e : edges)
-    if (!e.sharp) {
-      const int r0 = find(e.f0), r1 = find(e.f1);
-      if (r0 != r1) parent[size_t(std::max(r0, r1))] = std::min(r0, r1);  // the root is the lowest triangle
-    }
-  Eigen::VectorXi patch(nf);
-  std::vector<int> id(static_cast<size_t>(nf), -1);
   int n = 0;
-  for (int f = 0; f < nf; ++f) {
-    const int r = find(f);
-    if (id[size_t(r)] < 0) id[size_t(r)] = n++;
-    patch[f] = id[size_t(r)];
-  }
+  Eigen::VectorXi patch = join_triangles(
+      int(surface.F.rows()), manifold_edges(surface, angle_deg), [](const ManifoldEdge& e) { return !e.sharp; }, n);
   if (patches) *patches = n;
   return patch;
 }
@@ -245,7 +269,7 @@ bool part_edge_shape(const std::vector<int>& verts, const std::vector<Vec3>& lin
   if (turns > 0 && turn / turns > kEdgeTurn) return false;
   double sum = 0, sq = 0;
   for (size_t k = 1; k < verts.size(); ++k) {
-    const auto it = dihedral.find((long long)std::min(verts[k - 1], verts[k]) * nv + std::max(verts[k - 1], verts[k]));
+    const auto it = dihedral.find(edge_key(verts[k - 1], verts[k], nv));
     const double d = it == dihedral.end() ? 0.0 : it->second;
     sum += d, sq += d * d;
   }
@@ -255,23 +279,14 @@ bool part_edge_shape(const std::vector<int>& verts, const std::vector<Vec3>& lin
 
 }  // namespace
 
-namespace {
-
-/// A chain of sharp edges between nodes (vertices with 1 or >= 3 sharp edges), or a closed loop.
-struct Chain {
-  std::vector<int> verts;
-  bool closed = false;
-};
-
-/// The chains of the sharp-edge graph `adj` (per vertex its sharp-edge neighbours).
-std::vector<Chain> sharp_chains(const std::vector<std::vector<int>>& adj) {
+std::vector<EdgeChain> edge_chains(const std::vector<std::vector<int>>& adj) {
   const long long nv = (long long)adj.size();
   auto is_node = [&](int v) { return adj[size_t(v)].size() != 2; };
-  auto key = [&](int a, int b) { return (long long)std::min(a, b) * nv + std::max(a, b); };
-  std::unordered_map<long long, char> visited;  // sharp edges, keyed by (low, high)
-  std::vector<Chain> out;
+  auto key = [&](int a, int b) { return edge_key(a, b, nv); };
+  std::unordered_map<long long, char> visited;  // edges, keyed by (low, high)
+  std::vector<EdgeChain> out;
   auto walk = [&](int start, int next) {
-    Chain r{{start}, false};
+    EdgeChain r{{start}, false};
     int prev = start, cur = next;
     visited[key(prev, cur)] = 1;
     while (true) {
@@ -300,13 +315,10 @@ std::vector<Chain> sharp_chains(const std::vector<std::vector<int>>& adj) {
   return out;
 }
 
-}  // namespace
-
 SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double min_length, double scale) {
   const auto& V = surface.V;
-  const auto& F = surface.F;
   const Eigen::Index nv = V.rows();
-  auto key = [&](int a, int b) { return (long long)std::min(a, b) * nv + std::max(a, b); };
+  auto key = [&](int a, int b) { return edge_key(a, b, nv); };
   const std::vector<ManifoldEdge> edges = manifold_edges(surface, angle_deg);
   std::vector<std::vector<int>> adj(static_cast<size_t>(nv));  // sharp-edge neighbours
   for (const ManifoldEdge& e : edges)
@@ -315,14 +327,13 @@ SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double
     // The edges sharp at the scale, on the sharp edges' chains that are a part's edges: the chains are judged
     // whole (the scale test drops single edges along a level set's staircase, whose pieces would be short)
     std::unordered_map<long long, double> dihedral;  // of each sharp edge, degrees
-    auto normal = [&](int f) {
-      return Vec3((V.row(F(f, 1)) - V.row(F(f, 0))).cross(V.row(F(f, 2)) - V.row(F(f, 0))).transpose().normalized());
-    };
+    const std::vector<Vec3> normal = unit_normals(area_normals(surface));
     for (const ManifoldEdge& e : edges)
       if (e.sharp)
-        dihedral[key(e.a, e.b)] = std::acos(std::clamp(normal(e.f0).dot(normal(e.f1)), -1.0, 1.0)) * 180.0 / M_PI;
+        dihedral[key(e.a, e.b)] =
+            std::acos(std::clamp(normal[size_t(e.f0)].dot(normal[size_t(e.f1)]), -1.0, 1.0)) * 180.0 / M_PI;
     std::unordered_map<long long, char> part;  // sharp edges on chains that are a part's edges
-    for (const Chain& c : sharp_chains(adj)) {
+    for (const EdgeChain& c : edge_chains(adj)) {
       std::vector<Vec3> line;
       for (int v : c.verts) line.push_back(V.row(v).transpose());
       const bool between_corners =
@@ -346,7 +357,7 @@ SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double
     }
     return corner_index[size_t(v)];
   };
-  for (const Chain& r : sharp_chains(adj)) {
+  for (const EdgeChain& r : edge_chains(adj)) {
     std::vector<Vec3> line;
     for (int v : r.verts) line.push_back(V.row(v).transpose());
     if (line.size() < 2 || line_length(line) < min_length) continue;
@@ -360,36 +371,18 @@ SurfaceCreases find_creases(const SurfaceMesh& surface, double angle_deg, double
 }
 
 CreaseFaces crease_faces(const SurfaceMesh& surface, const SurfaceCreases& creases) {
-  const auto& V = surface.V;
-  const auto& F = surface.F;
-  const int nf = int(F.rows());
-  const std::vector<std::array<int, 2>> on_line = crease_edges(creases);
-  std::vector<int> parent(static_cast<size_t>(nf));
-  for (int f = 0; f < nf; ++f) parent[size_t(f)] = f;
-  auto find = [&](int f) {
-    while (parent[size_t(f)] != f) f = parent[size_t(f)] = parent[size_t(parent[size_t(f)])];
-    return f;
-  };
-  for (const ManifoldEdge& e : manifold_edges(surface, 90.0))
-    if (!std::binary_search(on_line.begin(), on_line.end(),
-                            std::array<int, 2>{std::min(e.a, e.b), std::max(e.a, e.b)})) {
-      const int r0 = find(e.f0), r1 = find(e.f1);
-      if (r0 != r1) parent[size_t(std::max(r0, r1))] = std::min(r0, r1);
-    }
+  const int nf = int(surface.F.rows());
+  const std::vector<std::array<int, 2>> on_line = crease_edges(creases);  // (low, high), as ManifoldEdge's (a, b)
   CreaseFaces out;
-  out.patch.resize(nf);
-  std::vector<int> id(static_cast<size_t>(nf), -1);
-  for (int f = 0; f < nf; ++f) {
-    const int r = find(f);
-    if (id[size_t(r)] < 0) id[size_t(r)] = out.faces++;
-    out.patch[f] = id[size_t(r)];
-  }
-  std::vector<Vec3> normal(static_cast<size_t>(nf)), mean(size_t(out.faces), Vec3::Zero());
-  for (int f = 0; f < nf; ++f) {
-    const Vec3 n = (V.row(F(f, 1)) - V.row(F(f, 0))).cross(V.row(F(f, 2)) - V.row(F(f, 0))).transpose();
-    normal[size_t(f)] = n.norm() > 0 ? Vec3(n.normalized()) : Vec3::Zero();
-    mean[size_t(out.patch[f])] += n;
-  }
+  out.patch = join_triangles(
+      nf, manifold_edges(surface, 90.0),
+      [&](const ManifoldEdge& e) {
+        return !std::binary_search(on_line.begin(), on_line.end(), std::array{e.a, e.b});
+      },
+      out.faces);
+  const std::vector<Vec3> area_normal = area_normals(surface), normal = unit_normals(area_normal);
+  std::vector<Vec3> mean(size_t(out.faces), Vec3::Zero());
+  for (int f = 0; f < nf; ++f) mean[size_t(out.patch[f])] += area_normal[size_t(f)];
   for (auto& m : mean)
     if (m.norm() > 0) m.normalize();
   out.planar.assign(size_t(out.faces), 1);
@@ -400,16 +393,10 @@ CreaseFaces crease_faces(const SurfaceMesh& surface, const SurfaceCreases& creas
 }
 
 std::vector<char> flat_face_triangles(const SurfaceMesh& surface, double h) {
-  const auto& V = surface.V;
-  const auto& F = surface.F;
-  const int nf = int(F.rows());
-  std::vector<Vec3> normal(static_cast<size_t>(nf));
+  const int nf = int(surface.F.rows());
+  const std::vector<Vec3> area_normal = area_normals(surface), normal = unit_normals(area_normal);
   std::vector<double> area(static_cast<size_t>(nf));
-  for (int f = 0; f < nf; ++f) {
-    const Vec3 n = (V.row(F(f, 1)) - V.row(F(f, 0))).cross(V.row(F(f, 2)) - V.row(F(f, 0))).transpose();
-    area[size_t(f)] = 0.5 * n.norm();
-    normal[size_t(f)] = n.norm() > 0 ? Vec3(n.normalized()) : Vec3::Zero();
-  }
+  for (int f = 0; f < nf; ++f) area[size_t(f)] = 0.5 * area_normal[size_t(f)].norm();
   std::vector<std::vector<int>> nbrs(static_cast<size_t>(nf));
   for (const ManifoldEdge& e : manifold_edges(surface, 90.0))
     nbrs[size_t(e.f0)].push_back(e.f1), nbrs[size_t(e.f1)].push_back(e.f0);
@@ -450,7 +437,7 @@ SurfaceCreases flat_face_creases(const SurfaceMesh& surface, const SurfaceCrease
   for (Eigen::Index f = 0; f < surface.F.rows(); ++f)
     for (int k = 0; k < 3; ++k) {
       const int a = surface.F(f, k), b = surface.F(f, (k + 1) % 3);
-      beside_flat[(long long)std::min(a, b) * nv + std::max(a, b)] |= flat[size_t(f)];
+      beside_flat[edge_key(a, b, nv)] |= flat[size_t(f)];
     }
   SurfaceCreases out;
   std::vector<int> corner(creases.corners.size(), -1);
@@ -464,7 +451,7 @@ SurfaceCreases flat_face_creases(const SurfaceMesh& surface, const SurfaceCrease
     const auto& vs = creases.vertices[l];
     size_t along = 0;
     for (size_t k = 1; k < vs.size(); ++k) {
-      const auto it = beside_flat.find((long long)std::min(vs[k - 1], vs[k]) * nv + std::max(vs[k - 1], vs[k]));
+      const auto it = beside_flat.find(edge_key(vs[k - 1], vs[k], nv));
       along += it != beside_flat.end() && it->second;
     }
     if (2 * along <= vs.size() - 1) continue;
@@ -716,7 +703,6 @@ CreaseSnap creases_at_vertices(const RowMatrixX3d& V, const Eigen::Matrix<int, E
     boxes[l].min().array() -= tol;
     boxes[l].max().array() += tol;
   }
-  std::vector<char> used(creases.lines.size(), 0);
   for (Eigen::Index v = 0; v < V.rows(); ++v) {
     if (!on_boundary[size_t(v)]) continue;
     const Vec3 x = V.row(v).transpose();
@@ -729,7 +715,6 @@ CreaseSnap creases_at_vertices(const RowMatrixX3d& V, const Eigen::Matrix<int, E
       const double d = (closest_on_line(creases.lines[l], x) - x).norm();
       if (d <= best) best = d, out.line[size_t(v)] = int(l);
     }
-    if (out.line[size_t(v)] >= 0) used[size_t(out.line[size_t(v)])] = 1;
   }
   // a boundary quad with a lattice corner where the crease runs on (a PolyCube corner on a smooth part of it):
   // nearly flat at the vertex, or wide with both its edges there on the vertex's line (sliding along the line
@@ -770,7 +755,7 @@ CreaseSnap creases_at_vertices(const RowMatrixX3d& V, const Eigen::Matrix<int, E
       if (!along) out.line[size_t(v)] = out.corner[size_t(v)] = -1;
     }
   }
-  std::fill(used.begin(), used.end(), 0);
+  std::vector<char> used(creases.lines.size(), 0);  // lines with a vertex kept on them
   for (Eigen::Index v = 0; v < V.rows(); ++v)
     if (out.line[size_t(v)] >= 0) used[size_t(out.line[size_t(v)])] = 1;
   for (Eigen::Index v = 0; v < V.rows(); ++v) out.vertices += out.line[size_t(v)] >= 0 || out.corner[size_t(v)] >= 0;

@@ -60,6 +60,18 @@ inline constexpr double kFlatFaceArea = 4.0;
 /// \pre creases from find_creases on this surface; h > 0
 SurfaceCreases flat_face_creases(const SurfaceMesh& surface, const SurfaceCreases& creases, double h);
 
+/// A chain of a graph's edges between two of its nodes (vertices with 1 or at least 3 edges), or a loop (its
+/// first vertex repeated at its end).
+struct EdgeChain {
+  std::vector<int> verts;
+  bool closed = false;
+};
+
+/// The chains of the graph `adj` (per vertex its neighbours, no edge twice): from each node in the order of
+/// their ids, along each of its edges in `adj`'s order through vertices with two edges to the next node; then
+/// the loops left. Every edge is on exactly one chain.
+std::vector<EdgeChain> edge_chains(const std::vector<std::vector<int>>& adj);
+
 /// The surface edges of the crease lines, (low, high) vertex pairs, sorted.
 std::vector<std::array<int, 2>> crease_edges(const SurfaceCreases& creases);
 

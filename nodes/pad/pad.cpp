@@ -351,6 +351,9 @@ class LayerPlan {
   /// The quads on edges whose lattice and surface turns differ by more than the tolerance (or not manifold).
   const std::vector<char>& seeds() const { return seed_; }
 
+  /// The boundary edges (quad_edges).
+  const std::vector<BoundaryEdge>& edges() const { return edges_; }
+
   /// Grows `pad` until the layer ends only on edges where it may, and every vertex with padded and unpadded
   /// quads has its padded ones as one fan between two such edges.
   void close(std::vector<char>& pad) const {
@@ -485,10 +488,11 @@ namespace {
 /// One layer: a hex on each padded quad of Q (the boundary quads of `mesh`), its inner quad on new copies of the
 /// quad's vertices, which the old hexes take (pad_boundary). `layer_hex` (per hex of the result, 1 for a layer
 /// hex) is extended by the new hexes. `thin_ends` (optional) gets the vertices where the layer ends whose
-/// offset had to be cut below a quarter to keep the hexes there from inverting.
+/// offset had to be cut below a quarter to keep the hexes there from inverting. `q_edges` (optional): Q's
+/// quad_edges, where the caller has them (computed here when the layer has ends and they are not given).
 HexMesh extrude_layer(const HexMesh& mesh, const BoundaryQuadMatrix& Q, const std::vector<char>& padded,
                       const TriangleTree* tree, const PadParams& p, PadStats& st, std::vector<char>& layer_hex,
-                      std::vector<int>* thin_ends = nullptr) {
+                      std::vector<int>* thin_ends = nullptr, const std::vector<BoundaryEdge>* q_edges = nullptr) {
   const Eigen::Index nv = mesh.V.rows(), nh = mesh.H.rows();
   const Eigen::Index layer = Eigen::Index(std::count(padded.begin(), padded.end(), 1));
 
@@ -534,7 +538,8 @@ HexMesh extrude_layer(const HexMesh& mesh, const BoundaryQuadMatrix& Q, const st
     }
   }
   if (layer < Q.rows()) {
-    const std::vector<BoundaryEdge> bedges = quad_edges(mesh, Q);
+    std::vector<BoundaryEdge> own;
+    const std::vector<BoundaryEdge>& bedges = q_edges ? *q_edges : (own = quad_edges(mesh, Q));
     // the layer's end through a vertex: its first end edge's direction minus its second's (length 2 where the
     // end runs straight through the vertex, about 1.4 where it turns by 90 degrees)
     std::vector<Vec3> end_tangent(static_cast<size_t>(nb), Vec3::Zero());
@@ -691,7 +696,7 @@ HexMesh pad_boundary(const HexMesh& input, const SurfaceMesh* surface, const Pad
         PadStats trial = st;
         std::vector<char> trial_hex = layer_hex;
         std::vector<int> thin;
-        HexMesh next = extrude_layer(mesh, B, pad, tree.get(), p, trial, trial_hex, &thin);
+        HexMesh next = extrude_layer(mesh, B, pad, tree.get(), p, trial, trial_hex, &thin, &plan.edges());
         if (thin.empty() || attempt == kEndRetries) {
           mesh = std::move(next), st = trial, layer_hex = std::move(trial_hex);
           break;

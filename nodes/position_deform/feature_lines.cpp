@@ -41,31 +41,16 @@ std::vector<FeatureLine> feature_lines(const RowMatrixX3d& X, const RowMatrixX3d
   std::vector<FeatureLine> out;
   for (auto& [chart, g] : graph) {
     const int a = label_axis(seg.charts[size_t(chart)].label);
-    std::map<std::array<int, 2>, char> used;
-    auto walk = [&](int start, int next) {  // a run from start through degree-2 vertices
-      std::vector<int> run{start};
-      int prev = start, cur = next;
-      used[{std::min(prev, cur), std::max(prev, cur)}] = 1;
-      while (true) {
-        run.push_back(cur);
-        const auto& nb = g[cur];
-        if (nb.size() != 2 || cur == start) break;
-        const int nxt = nb[0] == prev ? nb[1] : nb[0];
-        if (used.count({std::min(cur, nxt), std::max(cur, nxt)})) break;
-        used[{std::min(cur, nxt), std::max(cur, nxt)}] = 1;
-        prev = cur, cur = nxt;
-      }
-      return run;
-    };
-    std::vector<std::vector<int>> runs;
-    for (auto& [v, nb] : g)
-      if (nb.size() != 2)
-        for (int w : nb)
-          if (!used.count({std::min(v, w), std::max(v, w)})) runs.push_back(walk(v, w));
-    for (auto& [v, nb] : g)  // loops
-      for (int w : nb)
-        if (!used.count({std::min(v, w), std::max(v, w)})) runs.push_back(walk(v, w));
-    for (const auto& run : runs) {
+    // its crease edges' chains, on local vertex ids in the order of the global ones
+    std::vector<int> global;
+    std::map<int, int> local;
+    for (const auto& [v, nb] : g) local[v] = int(global.size()), global.push_back(v);
+    std::vector<std::vector<int>> adj(global.size());
+    for (const auto& [v, nb] : g)
+      for (int w : nb) adj[size_t(local[v])].push_back(local[w]);
+    for (EdgeChain& c : edge_chains(adj)) {
+      for (int& v : c.verts) v = global[size_t(v)];
+      const std::vector<int>& run = c.verts;
       double length = 0;
       for (size_t i = 1; i < run.size(); ++i) length += (X.row(run[i]) - X.row(run[i - 1])).norm();
       if (length < min_length) continue;
