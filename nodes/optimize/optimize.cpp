@@ -64,6 +64,8 @@ const double kPaddedSharpCos = std::cos(75.0 * M_PI / 180.0);
 /// A boundary vertex within this many hex edges of a crease lies on it (creases_at_vertices): the lattice
 /// puts vertices on a crease exactly, or within a layer's curvature where a layer ends beside it.
 constexpr double kOnCrease = 0.05;
+/// Rounds of return_released: a vertex halted half way may go on once its neighbours have followed.
+constexpr int kReturnRounds = 10;
 
 class Optimizer {
  public:
@@ -117,6 +119,7 @@ class Optimizer {
   /// Phases (a) to (b''): untangling, max-min, whole-hex moves, region smoothing.
   void improve() {
     released_.assign(size_t(V_.rows()), 0);
+    cap_.clear();
     // local sweeps first: cheap, they untangle most hexes with little motion
     untangle();
     if (p_.global_iterations > 0 && count_inverted() > 0) {
@@ -171,18 +174,18 @@ class Optimizer {
       maxmin();
     }
     smooth_worst();
+    if (return_released() > 0) maxmin();
   }
 
   /// Phase (c), the shape improvement, and the result.
   HexMesh finish(const std::string& source) {
     shape();
+    return_released();
     HexMesh out;
     out.V = V_;
     out.H = H_;
     out.source = source;
-    for (Eigen::Index v = 0; v < V_.rows(); ++v)
-      if (boundary_[size_t(v)])
-        st_.boundary_distance_max = std::max(st_.boundary_distance_max, tree_.distance(V_.row(v).transpose()) / diag_);
+    st_.boundary_distance_max = departure();
     return out;
   }
 
@@ -195,7 +198,9 @@ class Optimizer {
   /// lattice does not follow) may be impossible to untangle with its boundary corners on the surface.
   /// A solver rejects an inverted hex but accepts a boundary vertex slightly off the surface, so the
   /// boundary vertices of the hexes still inverted may leave it (boundary_distance_max reports how far),
-  /// then the untangling sweeps run again.
+  /// then the untangling sweeps run again. Once untangled, return_released brings them back.
+  /// (A cap of half a hex edge on how far they may go, tried on 2026-12-03, left the cuboid screw thread's
+  /// crease candidate inverted at -0.65 where the uncapped release untangles it: docs/optimize.md.)
   void release_and_untangle() {
     if (!p_.release_boundary || count_inverted() == 0) return;
     const auto q = all_quality();
@@ -205,6 +210,53 @@ class Optimizer {
           if (boundary_[size_t(H_(h, k))] && !released_[size_t(H_(h, k))])
             released_[size_t(H_(h, k))] = 1, ++st_.released_vertices;
     untangle();
+  }
+
+  /// The largest distance of a boundary vertex from the surface / the bbox diagonal.
+  double departure() const {
+    double d = 0;
+    for (Eigen::Index v = 0; v < V_.rows(); ++v)
+      if (boundary_[size_t(v)]) d = std::max(d, tree_.distance(V_.row(v).transpose()) / diag_);
+    return d;
+  }
+
+  /// Released boundary vertices go back onto the surface (onto their crease, if the lattice put them on one)
+  /// as far as their hexes allow: the untangling released them while their neighbours were folded, and the
+  /// phases after it have moved those neighbours. Per vertex, in index order, in rounds until none moves: the
+  /// whole way back (it is then no longer released), else half or a quarter of it; a position is kept if no
+  /// hex of the vertex is inverted there (that was not) and their minimum scaled Jacobian stays at least the
+  /// mesh's, so the minimum never falls. From then on a released vertex's moves never take it farther from
+  /// the surface than it is (cap_, project). Returns the vertices moved, fully or in part.
+  long return_released() {
+    if (std::find(released_.begin(), released_.end(), 1) == released_.end()) return 0;
+    const double floor = sj_min();
+    cap_.assign(size_t(V_.rows()), std::numeric_limits<double>::infinity());
+    std::vector<char> moved(size_t(V_.rows()), 0);
+    for (int round = 0; round < kReturnRounds; ++round) {
+      bool any = false;
+      for (size_t v = 0; v < released_.size(); ++v) {
+        if (!released_[v]) continue;
+        const Vec3 x0 = V_.row(Eigen::Index(v)).transpose();
+        released_[v] = 0;  // project() as for a vertex on the surface
+        const Vec3 target = project(int(v), x0);
+        released_[v] = 1;
+        const Local l0 = local(int(v));
+        for (const double t : {1.0, 0.5, 0.25}) {
+          V_.row(Eigen::Index(v)) = (x0 + t * (target - x0)).transpose();
+          const Local l = local(int(v));
+          if (l.inverted <= l0.inverted && l.sj_min >= std::min(floor, l0.sj_min)) {
+            any = true, moved[v] = 1;
+            if (t == 1.0) released_[v] = 0, ++st_.returned_vertices;
+            break;
+          }
+          V_.row(Eigen::Index(v)) = x0.transpose();
+        }
+      }
+      if (!any) break;
+    }
+    for (size_t v = 0; v < released_.size(); ++v)
+      if (released_[v]) cap_[v] = tree_.distance(V_.row(Eigen::Index(v)).transpose());
+    return long(std::count(moved.begin(), moved.end(), 1));
   }
 
   double sj_min() const {
@@ -379,7 +431,13 @@ class Optimizer {
     return !snap_.line.empty() && (snap_.line[size_t(v)] >= 0 || snap_.corner[size_t(v)] >= 0) && on_surface(v);
   }
   Vec3 project(int v, const Vec3& x) const {
-    if (!on_surface(v)) return x;
+    if (!on_surface(v)) {
+      if (!boundary_[size_t(v)] || cap_.empty()) return x;
+      // a released vertex after return_released: no farther from the surface than it went back to
+      const Vec3 y = tree_.closest(x).point;
+      const double d = (x - y).norm();
+      return d <= cap_[size_t(v)] ? x : Vec3(y + (cap_[size_t(v)] / d) * (x - y));
+    }
     if (on_crease(v)) {
       if (snap_.corner[size_t(v)] >= 0) return creases_.corners[size_t(snap_.corner[size_t(v)])];
       return closest_on_line(creases_.lines[size_t(snap_.line[size_t(v)])], x);
@@ -899,9 +957,10 @@ class Optimizer {
   std::vector<double> scale_;
   std::vector<std::vector<int>> classes_;
   std::vector<char> boundary_;
-  std::vector<char> released_;                  ///< boundary vertices allowed off the surface (last-resort untangling)
-  SurfaceCreases creases_;                      ///< the surface's sharp creases (feature_angle > 0)
-  CreaseSnap snap_;                             ///< boundary vertices on them (empty vectors when off)
+  std::vector<char> released_;  ///< boundary vertices allowed off the surface (last-resort untangling)
+  std::vector<double> cap_;     ///< after return_released: per released vertex, how far from the surface it may be
+  SurfaceCreases creases_;      ///< the surface's sharp creases (feature_angle > 0)
+  CreaseSnap snap_;             ///< boundary vertices on them (empty vectors when off)
   std::vector<int> leash_line_, leash_corner_;  ///< per vertex: the crease line / corner a freed crease vertex
                                                 ///< stays near, -1 none (free_padded_creases; empty when off)
   double leash_ = 0;                            ///< how near: kLeash hex edges

@@ -85,6 +85,7 @@ struct OptimizeStats {
   double boundary_distance_max = 0;  ///< max distance of a boundary vertex from the surface / bbox diagonal
   bool time_budget_hit = false;
   long released_vertices = 0;    ///< boundary vertices released from the surface to untangle (release_boundary)
+  long returned_vertices = 0;    ///< ... of them, those that went back onto it once untangled
   int crease_lines = 0;          ///< crease lines of the surface at feature_angle (at least 1.5 hex edges long)
   int crease_lines_snapped = 0;  ///< ... with boundary vertices kept on them
   long crease_vertices = 0;      ///< boundary vertices kept on a crease line or at a crease corner
@@ -110,10 +111,11 @@ struct OptimizeStats {
         stat("smooth_rounds", &S::smooth_rounds), stat("smooth_kept", &S::smooth_kept),
         stat("iterations", &S::iterations), stat("moves", &S::moves), stat("colours", &S::colours),
         stat("boundary_distance_max", &S::boundary_distance_max), stat("released_vertices", &S::released_vertices),
-        stat("time_budget_hit", &S::time_budget_hit), stat("seconds", &S::seconds),
-        stat("phase_seconds.untangle", &S::untangle_seconds), stat("phase_seconds.global", &S::global_seconds),
-        stat("phase_seconds.maxmin", &S::maxmin_seconds), stat("phase_seconds.element", &S::element_seconds),
-        stat("phase_seconds.smooth", &S::smooth_seconds), stat("phase_seconds.shape", &S::shape_seconds));
+        stat("returned_vertices", &S::returned_vertices), stat("time_budget_hit", &S::time_budget_hit),
+        stat("seconds", &S::seconds), stat("phase_seconds.untangle", &S::untangle_seconds),
+        stat("phase_seconds.global", &S::global_seconds), stat("phase_seconds.maxmin", &S::maxmin_seconds),
+        stat("phase_seconds.element", &S::element_seconds), stat("phase_seconds.smooth", &S::smooth_seconds),
+        stat("phase_seconds.shape", &S::shape_seconds));
   }
 };
 

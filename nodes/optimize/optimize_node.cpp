@@ -92,8 +92,8 @@ const bool registered = register_node(
           j["crease_lines_snapped"] = s.crease_lines_snapped;
           j["crease_vertices"] = s.crease_vertices;
           put_stats(s, j);
-          if (s.released_vertices > 0)
-            ctx.warn(std::to_string(s.released_vertices) +
+          if (s.released_vertices > s.returned_vertices)
+            ctx.warn(std::to_string(s.released_vertices - s.returned_vertices) +
                      " boundary vertices left the surface to untangle hexes (max distance " +
                      std::to_string(s.boundary_distance_max) + " of the bbox diagonal)");
           if (s.inverted_after > 0)
@@ -103,7 +103,7 @@ const bool registered = register_node(
             ctx.warn("optimization stopped at its time budget of " + std::to_string(p.time_budget) + " s");
           return make_artefact(std::move(out));
         })
-        .with_version("29"));
+        .with_version("30"));
 
 }  // namespace
 }  // namespace polyhex
