@@ -49,7 +49,8 @@ struct OptimizeParams {
                                   ///< on the machine's load; the sweeps' own caps bound the work
   bool move_boundary = true;      ///< boundary vertices may slide on the surface
   bool release_boundary =
-      true;  ///< last resort: boundary corners of hexes still inverted after untangling may leave the surface
+      true;  ///< last resort: boundary corners of hexes still inverted after untangling may leave the surface;
+             ///< once untangled they go back as far as their hexes allow without lowering the minimum
   double feature_angle =
       kFeatureAngle;  ///< degrees: an edge of the surface sharper than this is a crease (features.h), 0 = no
                       ///< crease handling; if the first result is poor (fallback_below_sj), a second candidate puts

@@ -52,7 +52,8 @@ const bool registered = register_node(
             .add("time_budget", &P::time_budget, "seconds for the whole stage", 0.0, 1e6)
             .add("move_boundary", &P::move_boundary, "boundary vertices may slide on the surface")
             .add("release_boundary", &P::release_boundary,
-                 "last resort: boundary corners of hexes still inverted after untangling may leave the surface")
+                 "last resort: boundary corners of hexes still inverted after untangling may leave the surface "
+                 "(once untangled they go back as far as their hexes allow without lowering the minimum)")
             .add("feature_angle", &P::feature_angle,
                  "an edge of the surface sharper than this many degrees is a crease (0 = no crease handling); when "
                  "the first result is poor (see fallback_below_sj), the mesh is optimized again with paths of "
