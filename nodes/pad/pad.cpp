@@ -337,7 +337,6 @@ class LayerPlan {
  public:
   LayerPlan(const HexMesh& mesh, const BoundaryQuadMatrix& Q, double tolerance_deg)
       : mesh_(mesh), Q_(Q), edges_(quad_edges(mesh, Q)) {
-    classify(tolerance_deg);
     at_.resize(size_t(mesh.V.rows()));
     for (size_t i = 0; i < edges_.size(); ++i) {
       at_[size_t(edges_[i].a)].push_back(int(i));
@@ -346,6 +345,7 @@ class LayerPlan {
     quads_at_.resize(size_t(mesh.V.rows()));
     for (Eigen::Index q = 0; q < Q.rows(); ++q)
       for (int k = 0; k < 4; ++k) quads_at_[size_t(Q(q, k))].push_back(int(q));
+    classify(tolerance_deg);
   }
 
   /// The quads on edges whose lattice and surface turns differ by more than the tolerance (or not manifold).
@@ -448,8 +448,8 @@ class LayerPlan {
       const BoundaryEdge& e = edges_[i];
       const bool manifold = e.quads == 2 && e.hexes >= 1 && e.hexes <= 3 && !normal[size_t(e.q0)].isZero() &&
                             !normal[size_t(e.q1)].isZero();
-      if (!manifold) {  // every quad on it
-        for (Eigen::Index q = 0; q < Q_.rows(); ++q)
+      if (!manifold) {  // every quad on it: those at its first vertex that have it as a side
+        for (const int q : quads_at_[size_t(e.a)])
           for (int k = 0; k < 4; ++k) {
             const int a = Q_(q, k), b = Q_(q, (k + 1) % 4);
             if (std::min(a, b) == e.a && std::max(a, b) == e.b) seed_[size_t(q)] = 1;

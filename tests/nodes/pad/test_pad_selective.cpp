@@ -134,3 +134,28 @@ TEST_CASE("selective padding: two parts meeting on a convex crease are padded in
   CHECK(min_sj(m, [](const Eigen::Vector3d& c) { return c.y() < 1 && c.z() > 5 && c.x() > 1 && c.x() < 5; }) > 0.99);
   CHECK(hex_quality(m, nullptr).nonmanifold_boundary_edges == 0);
 }
+
+TEST_CASE("selective padding: every quad on a non-manifold edge is padded", "[pad]") {
+  // cells (0,0,0) and (1,1,0) of a 2x2x1 grid touch along the edge x = y = 1 only: four boundary quads
+  // on it. Every other edge is a box's convex edge, where the layer is not needed.
+  const HexMesh g = test::grid_hex_mesh(2, 2, 1);
+  HexMesh m = g;
+  m.H.resize(2, 8);
+  m.H.row(0) = g.H.row(0);
+  m.H.row(1) = g.H.row(3);
+  const auto Q = hex_boundary_quads(m);
+  REQUIRE(Q.rows() == 12);
+  const std::vector<char> pad = select_padded_quads(m, Q, 30.0);
+  auto on_edge = [&](Eigen::Index q) {
+    int n = 0;
+    for (int k = 0; k < 4; ++k) n += m.V(Q(q, k), 0) == 1 && m.V(Q(q, k), 1) == 1;
+    return n == 2;
+  };
+  int on = 0;
+  for (Eigen::Index q = 0; q < Q.rows(); ++q)
+    if (on_edge(q)) {
+      ++on;
+      CHECK(pad[size_t(q)] == 1);
+    }
+  CHECK(on == 4);
+}
