@@ -174,7 +174,7 @@ class Optimizer {
       maxmin();
     }
     smooth_worst();
-    if (return_released() > 0) maxmin();
+    if (return_released()) maxmin();
   }
 
   /// Phase (c), the shape improvement, and the result.
@@ -226,12 +226,12 @@ class Optimizer {
   /// whole way back (it is then no longer released), else half or a quarter of it; a position is kept if no
   /// hex of the vertex is inverted there (that was not) and their minimum scaled Jacobian stays at least the
   /// mesh's, so the minimum never falls. From then on a released vertex's moves never take it farther from
-  /// the surface than it is (cap_, project). Returns the vertices moved, fully or in part.
-  long return_released() {
-    if (std::find(released_.begin(), released_.end(), 1) == released_.end()) return 0;
+  /// the surface than it is (cap_, project). Returns whether a vertex moved, fully or in part.
+  bool return_released() {
+    if (std::find(released_.begin(), released_.end(), 1) == released_.end()) return false;
     const double floor = sj_min();
     cap_.assign(size_t(V_.rows()), std::numeric_limits<double>::infinity());
-    std::vector<char> moved(size_t(V_.rows()), 0);
+    bool moved = false;
     for (int round = 0; round < kReturnRounds; ++round) {
       bool any = false;
       for (size_t v = 0; v < released_.size(); ++v) {
@@ -245,7 +245,7 @@ class Optimizer {
           V_.row(Eigen::Index(v)) = (x0 + t * (target - x0)).transpose();
           const Local l = local(int(v));
           if (l.inverted <= l0.inverted && l.sj_min >= std::min(floor, l0.sj_min)) {
-            any = true, moved[v] = 1;
+            any = moved = true;
             if (t == 1.0) released_[v] = 0, ++st_.returned_vertices;
             break;
           }
@@ -256,7 +256,7 @@ class Optimizer {
     }
     for (size_t v = 0; v < released_.size(); ++v)
       if (released_[v]) cap_[v] = tree_.distance(V_.row(Eigen::Index(v)).transpose());
-    return long(std::count(moved.begin(), moved.end(), 1));
+    return moved;
   }
 
   double sj_min() const {
