@@ -55,7 +55,8 @@ TetEdgeGraph::TetEdgeGraph(const RowMatrixX4i& T, int vertices) : start(size_t(v
 AxisChartOrder chart_order_evidence(const RowMatrixX3d& V, const TetEdgeGraph& graph,
                                     const std::vector<std::vector<int>>& vertex_charts,
                                     const std::vector<int>& chart_label,
-                                    const std::vector<std::vector<int>>& chart_neighbours, int a, double h) {
+                                    const std::vector<std::vector<int>>& chart_neighbours, int a, double h,
+                                    const std::vector<char>* crease_vertex) {
   const int nV = int(V.rows()), nC = int(chart_label.size());
   AxisChartOrder r;
   // Same-axis charts sharing a vertex are forced onto one plane (groups).
@@ -138,6 +139,60 @@ AxisChartOrder chart_order_evidence(const RowMatrixX3d& V, const TetEdgeGraph& g
         double diff = r.group_mean[gs[y]] - r.group_mean[gs[x]];
         if (std::abs(diff) > 0.5 * h) r.ordered.push_back({gs[x], gs[y], diff > 0 ? 1 : -1, std::abs(diff) / h});
       }
+  }
+  // Self bridges, along the input's creases: per crease vertex of a group on a chart b of another axis, the
+  // other vertices of b next to it (over tet edges) lie lower on average (the vertex is on b's top) or higher
+  // (on its foot). Vertices on the group as well count: a wall one triangle high has no vertex on it alone.
+  if (crease_vertex) {
+    struct Ends {
+      double top = 0, foot = 0;                // sums of the a-coordinates
+      int tops = 0, feet = 0;                  // vertices
+      double top_length = 0, foot_length = 0;  // along tet edges joining two vertices of the same end
+    };
+    // keyed by (group, chart, the label of the group's charts at the vertex): a step has the same face (its
+    // floor) on its top and at its foot; a group of opposite faces sharing a vertex is no step
+    std::map<std::tuple<int, int, int>, Ends> ends;
+    std::vector<std::vector<std::tuple<int, int, bool>>> ends_at(static_cast<size_t>(nV));  // (chart, label, top)
+    const double side_eps = 0.05 * h;
+    for (int v = 0; v < nV; ++v) {
+      if (vgroup[v] < 0 || !(*crease_vertex)[size_t(v)]) continue;
+      int g_label = -1;
+      for (int c : vertex_charts[v])
+        if (label_axis(chart_label[c]) == a) g_label = g_label < 0 || g_label == chart_label[c] ? chart_label[c] : -2;
+      if (g_label < 0) continue;  // on two opposite faces of the group
+      for (int b : vertex_charts[v]) {
+        if (label_axis(chart_label[b]) == a) continue;
+        double side = 0;
+        int n = 0;
+        for (int k = graph.start[v]; k < graph.start[v + 1]; ++k) {
+          const int u = graph.nbr[k];
+          const auto& cu = vertex_charts[u];
+          if (std::find(cu.begin(), cu.end(), b) != cu.end()) side += V(u, a) - V(v, a), ++n;
+        }
+        if (n == 0 || std::abs(side / n) < side_eps) continue;
+        Ends& e = ends[{vgroup[v], b, g_label}];
+        const bool top = side < 0;
+        if (top)
+          e.top += V(v, a), ++e.tops;
+        else
+          e.foot += V(v, a), ++e.feet;
+        ends_at[size_t(v)].emplace_back(b, g_label, top);
+      }
+    }
+    for (auto& [i, j] : graph.edges)
+      for (auto& [b, l, top] : ends_at[size_t(i)])
+        for (auto& [b2, l2, top2] : ends_at[size_t(j)])
+          if (b == b2 && l == l2 && top == top2 && vgroup[i] == vgroup[j]) {
+            Ends& e = ends[{vgroup[i], b, l}];
+            (top ? e.top_length : e.foot_length) += (V.row(i) - V.row(j)).norm();
+          }
+    for (auto& [key, e] : ends) {
+      if (e.top_length < kSelfBridgeLength * h || e.foot_length < kSelfBridgeLength * h) continue;
+      const double top = e.top / e.tops, foot = e.foot / e.feet;
+      if (top - foot > 0.5 * h) r.self_bridges.push_back({std::get<0>(key), std::get<1>(key), top, foot});
+    }
+    std::sort(r.self_bridges.begin(), r.self_bridges.end(),
+              [](const auto& x, const auto& y) { return std::tie(x.group, x.chart) < std::tie(y.group, y.chart); });
   }
   // A pair measured by the distance constraints comes first and wins over a bridged one.
   auto& o = r.ordered;

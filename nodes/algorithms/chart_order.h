@@ -15,6 +15,16 @@
 /// The evidence can contradict itself (a cycle p < q < r < p) where charts are far from planar: no plane
 /// per group then keeps every order. accept_orders takes the pairs by decreasing evidence and drops each
 /// one that would close a cycle.
+///
+/// The shortest such contradiction is one group alone (self bridges): a group that borders one chart of
+/// another axis along that chart's top and along its foot with charts of the same label (a step's floor on
+/// both), the foot lower by more than h/2. A plane per
+/// group gives that chart no height there: the map flattens it. A cuboid ring whose top climbs by ramps
+/// and drops back by one step wall is one: its top is one chart, on the wall's top and at its foot. They
+/// are looked for along the input's creases only (a part's step: top and foot each at least
+/// kSelfBridgeLength hex edges of crease): on a smooth surface the test also finds a group on both ends of
+/// a curved chart, mostly with one end under 1.5 hex edges long, and cutting those lowered the minimum
+/// scaled Jacobian of the organic models (docs/polycube_segment.md).
 #pragma once
 
 #include "nodes/artefacts/meshes.h"
@@ -54,7 +64,17 @@ struct AxisChartOrder {
   };
   std::vector<Sample> distance_samples;  ///< sorted by (p, q)
   std::vector<OrderedPair> ordered;      ///< unique by (p, q), sorted by (p, q)
+  /// A group on both ends of a chart of another axis: at the chart's top (the chart's vertices next to
+  /// the group's lie lower along a on average) and at its foot (they lie higher).
+  struct SelfBridge {
+    int group = -1, chart = -1;
+    double top = 0, foot = 0;  ///< mean a-coordinate of the group's vertices on the chart's top / foot
+  };
+  std::vector<SelfBridge> self_bridges;  ///< those with top - foot > h/2, sorted by (group, chart)
 };
+
+/// Length, in hex edges, of crease that a self bridge's top and its foot each need.
+constexpr double kSelfBridgeLength = 3.0;
 
 /// The order evidence of the charts of axis `axis`.
 /// \param V               #V by 3 deformed vertex positions
@@ -63,12 +83,15 @@ struct AxisChartOrder {
 /// \param chart_label     per chart its direction label 0..5
 /// \param chart_neighbours per chart its neighbouring charts
 /// \param h               hex edge length (the order threshold is h / 2)
+/// \param crease_vertex   per vertex: on a crease of the input; without it no self bridges are looked for
 /// \pre vertex_charts.size() == V.rows() == graph.start.size() - 1, chart ids in [0, chart_label.size()),
-///      chart_neighbours.size() == chart_label.size(), 0 <= axis < 3, h > 0
+///      chart_neighbours.size() == chart_label.size(), 0 <= axis < 3, h > 0, crease_vertex (when given)
+///      of size V.rows()
 AxisChartOrder chart_order_evidence(const RowMatrixX3d& V, const TetEdgeGraph& graph,
                                     const std::vector<std::vector<int>>& vertex_charts,
                                     const std::vector<int>& chart_label,
-                                    const std::vector<std::vector<int>>& chart_neighbours, int axis, double h);
+                                    const std::vector<std::vector<int>>& chart_neighbours, int axis, double h,
+                                    const std::vector<char>* crease_vertex = nullptr);
 
 struct OrderAcceptance {
   std::vector<std::vector<int>> up;  ///< accepted orders as a graph: lower group -> upper groups

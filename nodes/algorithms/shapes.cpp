@@ -505,11 +505,96 @@ SurfaceMesh make_filleted_cylinder(int res) {
   return pack(V, std::move(F), "filleted_cylinder");
 }
 
+/// A square ring (outer 1 x 1, hole 1/3 x 1/3, in the xz plane) whose top climbs around it, from y = 0.3 to
+/// 0.4, and drops back by one step wall 0.1 high, at z = 0.5 between the outside and the hole (x in [0, 1/3]):
+/// its top is one smooth face both on the step's top and at its foot, a structure in which no one plane per
+/// face gives the step a height (chart_order.h, self bridges). Cells of about 1 / resolution (walls in
+/// layers of two cells); sharp edges, genus 1.
+SurfaceMesh make_stepped_ring(int res) {
+  const int N = 6 * std::max(1, int(std::lround(res / 6.0)));  // x = 1/3, 2/3 and z = 1/2 on grid lines
+  const int a = N / 3, b = 2 * N / 3, m = N / 2;
+  const double c = 1.0 / N, y0 = 0.3, dy = 0.1;
+  const int L = std::max(1, int(std::lround(y0 / (2 * c))));  // wall layers below the step's foot
+  const double layer = y0 / L;
+  auto in_ring = [&](int i, int k) {
+    return i >= 0 && k >= 0 && i < N && k < N && !(i >= a && i < b && k >= a && k < b);
+  };
+  auto on_step = [&](int i, int k) { return k == m && i <= a; };
+  auto at = [&](int i, int k) { return k * (N + 1) + i; };
+  std::vector<Vec3> V;
+  std::vector<int> bot((N + 1) * (N + 1)), top((N + 1) * (N + 1));
+  for (int k = 0; k <= N; ++k)
+    for (int i = 0; i <= N; ++i) {
+      const double x = c * i, z = c * k;
+      bot[at(i, k)] = int(V.size());
+      V.emplace_back(x, 0.0, z);
+      // the angle about the ring's centre: pi on the step line (its high side), -pi just below it
+      const double u = (std::atan2(z - 0.5, x - 0.5) + kPi) / (2 * kPi);
+      top[at(i, k)] = int(V.size());
+      V.emplace_back(x, y0 + dy * u, z);
+    }
+  // A boundary point's wall column, bottom to top: levels `layer` apart, the last one at least half a layer
+  // below the top. On the step line the level y0 is the step's foot (the low side's top corner).
+  std::map<int, std::vector<int>> columns;
+  auto column = [&](int i, int k) -> const std::vector<int>& {
+    auto it = columns.find(at(i, k));
+    if (it != columns.end()) return it->second;
+    std::vector<int> col{bot[at(i, k)]};
+    const double y_top = V[size_t(top[at(i, k)])].y();
+    for (int j = 1; j * layer < y_top - 0.5 * layer || (on_step(i, k) && j <= L); ++j) {
+      col.push_back(int(V.size()));
+      V.emplace_back(c * i, j * layer, c * k);
+    }
+    col.push_back(top[at(i, k)]);
+    return columns.emplace(at(i, k), std::move(col)).first->second;
+  };
+  std::vector<int> low(size_t(a) + 1);
+  for (int i = 0; i <= a; ++i) low[size_t(i)] = column(i, m)[size_t(L)];
+  // a cell's top corner: on the step line, the high copy for cells above it (k >= m), the foot below
+  auto tv = [&](int i, int k, int cell_k) { return on_step(i, k) && cell_k < m ? low[size_t(i)] : top[at(i, k)]; };
+  auto bv = [&](int i, int k) { return bot[at(i, k)]; };
+  // a column as a cell sees it: up to the foot for the low side of the step line, all of it otherwise
+  auto side_column = [&](int i, int k, int cell_k) {
+    std::vector<int> col = column(i, k);
+    if (on_step(i, k) && cell_k < m) col.resize(size_t(L) + 1);
+    return col;
+  };
+  std::vector<Eigen::Vector3i> F;
+  // the strip between columns P and Q, where P -> Q along the boundary and then up is counter-clockwise
+  // seen from outside: triangles advance on the column whose next vertex is lower
+  auto strip = [&](const std::vector<int>& P, const std::vector<int>& Q) {
+    size_t i = 0, j = 0;
+    while (i + 1 < P.size() || j + 1 < Q.size()) {
+      const bool up_p = j + 1 == Q.size() || (i + 1 < P.size() && V[size_t(P[i + 1])].y() <= V[size_t(Q[j + 1])].y());
+      if (up_p)
+        F.emplace_back(P[i], Q[j], P[i + 1]), ++i;
+      else
+        F.emplace_back(P[i], Q[j], Q[j + 1]), ++j;
+    }
+  };
+  for (int k = 0; k < N; ++k)
+    for (int i = 0; i < N; ++i) {
+      if (!in_ring(i, k)) continue;
+      add_quad(V, F, bv(i, k), bv(i + 1, k), bv(i + 1, k + 1), bv(i, k + 1));                 // -y
+      add_quad(V, F, tv(i, k, k), tv(i, k + 1, k), tv(i + 1, k + 1, k), tv(i + 1, k, k));     // +y
+      if (!in_ring(i - 1, k)) strip(side_column(i, k, k), side_column(i, k + 1, k));          // -x
+      if (!in_ring(i + 1, k)) strip(side_column(i + 1, k + 1, k), side_column(i + 1, k, k));  // +x
+      if (!in_ring(i, k - 1)) strip(side_column(i + 1, k, k), side_column(i, k, k));          // -z
+      if (!in_ring(i, k + 1)) strip(side_column(i, k + 1, k), side_column(i + 1, k + 1, k));  // +z
+    }
+  for (int i = 0; i < a; ++i) {  // the step wall, facing -z: the columns above the foot
+    const std::vector<int>& p = column(i + 1, m);
+    const std::vector<int>& q = column(i, m);
+    strip(std::vector<int>(p.begin() + L, p.end()), std::vector<int>(q.begin() + L, q.end()));
+  }
+  return pack(V, std::move(F), "stepped_ring");
+}
+
 }  // namespace
 
 std::vector<std::string> shape_names() {
-  return {"sphere",       "torus", "bumpy_torus",   "rod_with_holes", "l_block",          "bent_pipe",
-          "fandisk_like", "box",   "sharp_l_block", "chamfered_box",  "filleted_cylinder"};
+  return {"sphere",       "torus", "bumpy_torus",   "rod_with_holes", "l_block",           "bent_pipe",
+          "fandisk_like", "box",   "sharp_l_block", "chamfered_box",  "filleted_cylinder", "stepped_ring"};
 }
 
 SurfaceMesh make_shape(const ShapeParams& p) {
@@ -526,6 +611,7 @@ SurfaceMesh make_shape(const ShapeParams& p) {
   if (p.name == "sharp_l_block") return make_sharp_l_block(r);
   if (p.name == "chamfered_box") return make_chamfered_box(r);
   if (p.name == "filleted_cylinder") return make_filleted_cylinder(r);
+  if (p.name == "stepped_ring") return make_stepped_ring(r);
   std::string list;
   for (auto& n : shape_names()) list += (list.empty() ? "" : ", ") + n;
   throw InvalidInput("shapes: unknown shape `" + p.name + "`; valid shapes: " + list);

@@ -16,8 +16,8 @@ struct ShapeParams {
 
 /// Names accepted by make_shape: sphere, torus, bumpy_torus, rod_with_holes, l_block, bent_pipe,
 /// fandisk_like, box, and the exact solids with sharp edges (their creases are the solid's, not rounded by a
-/// level set): sharp_l_block, chamfered_box, filleted_cylinder. `resolution` sets their grid (cells of about
-/// 1 / resolution).
+/// level set): sharp_l_block, chamfered_box, filleted_cylinder, stepped_ring. `resolution` sets their grid (cells of
+/// about 1 / resolution).
 std::vector<std::string> shape_names();
 
 /// A closed, manifold, outward-oriented triangle surface of the named shape.

@@ -74,8 +74,8 @@ struct PolyCubeSegmentation {
   int splits_ramp = 0;  ///< separating charts inserted to cut ramps (charts climbing along their axis, extension)
   int splits_order_cycle =
       0;                  ///< separating charts inserted to cut charts whose order evidence forms a cycle (extension)
-  int order_cycles = -1;  ///< same-axis chart pairs whose order evidence still closes a cycle (chart_order.h); -1 = not
-                          ///< measured (split_order_cycles off)
+  int order_cycles = -1;  ///< same-axis chart pairs whose order evidence still closes a cycle, and self bridges
+                          ///< (chart_order.h); -1 = not measured (split_order_cycles off)
   int splits_island = 0;  ///< cuts of ring charts from the boundary of a chart they enclose (extension)
   int repaired_corners = 0;  ///< vertices relabelled to resolve 4-valent corners / opposite touches (extension)
   int removed_small = 0;     ///< small charts removed during clean-up

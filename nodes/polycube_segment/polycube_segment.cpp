@@ -35,13 +35,16 @@ PolyCubeSegmentation segment_once(const Surface& s, const PolyCubeSegmentParams&
   if (p.split_multi_orientation) split_multi_orientation(s, normal, h, p.max_splits, st);
   if (p.split_wedges) split_wedges(s, normal, p, st);
   if (p.split_ramps) split_ramps(s, normal, p, st);
-  if (p.split_order_cycles) split_order_cycles(s, normal, p, *graph, st);
+  const std::vector<char> crease_vertex = creases ? crease_vertices(s, *creases) : std::vector<char>{};
+  const std::vector<char>* on_crease = creases ? &crease_vertex : nullptr;
+  if (p.split_order_cycles) split_order_cycles(s, normal, p, *graph, on_crease, st);
   if (p.final_cleanup) remove_small_invalid(s, normal, p, st);
   repair(s, normal, p, st);
   remove_narrow_charts(s, normal, p, st);
   PolyCubeSegmentation r = make_result(s, st);
-  r.order_cycles =
-      p.split_order_cycles ? order_cycles(s, analyse(s, st.label), *graph, p.hex_edge_length * s.diag, nullptr) : -1;
+  r.order_cycles = p.split_order_cycles
+                       ? order_cycles(s, analyse(s, st.label), *graph, p.hex_edge_length * s.diag, on_crease, nullptr)
+                       : -1;
   r.smoothing_iterations = smoothing;
   return r;
 }
@@ -131,7 +134,7 @@ int count_order_cycles(const TetMesh& deformed, const PolyCubeSegmentation& seg,
   Surface s = build_surface(deformed.V, seg.F);
   std::vector<int> label(seg.label.data(), seg.label.data() + seg.label.size());
   const TetEdgeGraph graph(deformed.T, int(deformed.V.rows()));
-  return order_cycles(s, analyse(s, label), graph, hex_edge_length * s.diag, nullptr);
+  return order_cycles(s, analyse(s, label), graph, hex_edge_length * s.diag, nullptr, nullptr);
 }
 
 PolyCubeSegmentation analyse_polycube_labels(const RowMatrixX3d& V, const RowMatrixX3i& F,

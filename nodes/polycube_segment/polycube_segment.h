@@ -33,7 +33,8 @@ struct PolyCubeSegmentParams {
   bool split_ramps = true;       ///< cut charts that climb far along their own axis (extension of §5.1, below)
   double ramp_extent = 12.0;  ///< a chart is a ramp when its vertices span more than this many hex edges along its axis
   bool split_order_cycles =
-      true;             ///< cut charts whose same-axis order evidence forms a cycle (extension of §5.1, below)
+      true;  ///< cut charts whose same-axis order evidence forms a cycle, or that sit on both ends of a step wall
+             ///< along the input's creases (chart_order.h self bridges; extension of §5.1, below)
   int max_splits = 32;  ///< upper bound on separating charts of each kind
   bool final_cleanup =
       true;  ///< after the splits, remove small charts with < 4 neighbours by flood fill (extension of §5.1)
@@ -73,7 +74,8 @@ PolyCubeSegmentation segment_polycube(const TetMesh& deformed, const PolyCubeSeg
                                       const TetMesh* input = nullptr);
 
 /// Same-axis chart pairs of `seg` whose order evidence on `deformed` closes a cycle (chart_order.h),
-/// at hex edge hex_edge_length × the boundary's reference length: what split_order_cycles reduces.
+/// at hex edge hex_edge_length × the boundary's reference length: what split_order_cycles reduces, but
+/// for self bridges (they need the input's creases, which this does not take).
 /// \pre seg was made on deformed (its triangles index deformed.V), hex_edge_length > 0
 /// \throw InvalidInput when seg has no labelled triangles or a triangle index is out of range
 int count_order_cycles(const TetMesh& deformed, const PolyCubeSegmentation& seg, double hex_edge_length);

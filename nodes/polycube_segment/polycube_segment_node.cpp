@@ -54,7 +54,8 @@ const bool registered = register_node(
             .add("split_ramps", &P::split_ramps, "cut charts that climb far along their own axis (extension)")
             .add("ramp_extent", &P::ramp_extent, "a ramp spans more than this many hex edges along its axis", 0, 1e6)
             .add("split_order_cycles", &P::split_order_cycles,
-                 "cut charts whose same-axis order evidence forms a cycle (extension)")
+                 "cut charts whose same-axis order evidence forms a cycle, or that sit on both ends of a step "
+                 "wall along the input's creases (extension)")
             .add("max_splits", &P::max_splits, "maximum separating charts of each kind", 0, 10000)
             .add("final_cleanup", &P::final_cleanup, "after the splits, remove small charts with < 4 neighbours")
             .add("split_islands", &P::split_islands, "cut ring charts from the boundary of a chart with < 4 neighbours")
@@ -85,7 +86,7 @@ const bool registered = register_node(
           }
           return make_artefact(std::make_shared<const PolyCubeSegmentation>(std::move(s)));
         })
-        .with_version("12"));
+        .with_version("13"));
 
 }  // namespace
 }  // namespace polyhex

@@ -140,15 +140,20 @@ struct LevelCut {
 
 void split_ramps(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p, State& st);
 
-/// Same-axis chart pairs whose order evidence closes a cycle (chart_order.h), summed over the axes, for
-/// the structure S; `cycle_charts`, when given, gets a flag per chart: on one of those cycles; `cuts`,
-/// when given, the cuts that open them (cycle_cuts: per group, each of its charts at the group's level).
+/// Same-axis chart pairs whose order evidence closes a cycle (chart_order.h), and self bridges along the
+/// input's creases (`crease_vertex`, per vertex of the surface: on one; none looked for without it), summed
+/// over the axes, for the structure S; `cycle_charts`, when given, gets a flag per chart: on one of those
+/// cycles; `cuts`, when given, the cuts that open them (cycle_cuts: per group, each of its charts at the
+/// group's level; a self bridge's group between its top and its foot).
 int order_cycles(const Surface& s, const Structure& S, const TetEdgeGraph& graph, double h,
-                 std::vector<char>* cycle_charts, std::vector<LevelCut>* cuts = nullptr,
-                 double* dropped_evidence = nullptr);
+                 const std::vector<char>* crease_vertex, std::vector<char>* cycle_charts,
+                 std::vector<LevelCut>* cuts = nullptr, double* dropped_evidence = nullptr);
+
+/// The vertices of the surface on an input crease (InputCreases::edge).
+std::vector<char> crease_vertices(const Surface& s, const InputCreases& creases);
 
 void split_order_cycles(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p,
-                        const TetEdgeGraph& graph, State& st);
+                        const TetEdgeGraph& graph, const std::vector<char>* crease_vertex, State& st);
 
 std::string id_list(const std::vector<int>& ids);
 

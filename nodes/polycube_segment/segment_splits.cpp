@@ -462,8 +462,17 @@ void split_ramps(const Surface& s, const std::vector<Vec3>& normal, const PolyCu
       [](const Extremum&) { return true; });
 }
 
+std::vector<char> crease_vertices(const Surface& s, const InputCreases& creases) {
+  std::vector<char> on(size_t(s.V->rows()), 0);
+  for (int t = 0; t < s.nf(); ++t)
+    for (int k = 0; k < 3; ++k)
+      if (creases.edge[size_t(t)][size_t(k)]) on[size_t((*s.F)(t, k))] = on[size_t((*s.F)(t, (k + 1) % 3))] = 1;
+  return on;
+}
+
 int order_cycles(const Surface& s, const Structure& S, const TetEdgeGraph& graph, double h,
-                 std::vector<char>* cycle_charts, std::vector<LevelCut>* cuts, double* dropped_evidence) {
+                 const std::vector<char>* crease_vertex, std::vector<char>* cycle_charts, std::vector<LevelCut>* cuts,
+                 double* dropped_evidence) {
   std::vector<std::vector<int>> vcharts(s.V->rows());
   for (int t = 0; t < s.nf(); ++t)
     for (int v : (*s.F).row(t)) {
@@ -474,11 +483,14 @@ int order_cycles(const Surface& s, const Structure& S, const TetEdgeGraph& graph
   if (cuts) cuts->clear();
   int total = 0;
   for (int a = 0; a < 3; ++a) {
-    const AxisChartOrder order = chart_order_evidence(*s.V, graph, vcharts, S.label, S.adj, a, h);
+    const AxisChartOrder order = chart_order_evidence(*s.V, graph, vcharts, S.label, S.adj, a, h, crease_vertex);
     const OrderAcceptance acc = accept_orders(order.ordered, order.groups);
-    total += int(acc.dropped.size());
-    if (dropped_evidence)
+    // A self bridge is a cycle of one group: it is cut between the chart's top and its foot.
+    total += int(acc.dropped.size() + order.self_bridges.size());
+    if (dropped_evidence) {
       for (int i : acc.dropped) *dropped_evidence += order.ordered[i].evidence;
+      for (const AxisChartOrder::SelfBridge& sb : order.self_bridges) *dropped_evidence += (sb.top - sb.foot) / h;
+    }
     if (!cycle_charts && !cuts) continue;
     std::vector<char> on_cycle(order.groups, 0);
     for (int i : acc.dropped) {
@@ -488,6 +500,12 @@ int order_cycles(const Surface& s, const Structure& S, const TetEdgeGraph& graph
         for (const CycleCut& cc : cycle_cuts(order, cycle, h))
           for (int c = 0; c < S.n; ++c)
             if (order.chart_group[c] == cc.group) cuts->push_back({c, cc.level, cc.excess});
+    }
+    for (const AxisChartOrder::SelfBridge& sb : order.self_bridges) {
+      on_cycle[sb.group] = 1;
+      if (cuts && sb.top - sb.foot >= h)
+        for (int c = 0; c < S.n; ++c)
+          if (order.chart_group[c] == sb.group) cuts->push_back({c, 0.5 * (sb.top + sb.foot), sb.top - sb.foot});
     }
     if (cycle_charts)
       for (int c = 0; c < S.n; ++c)
@@ -512,7 +530,7 @@ constexpr double kMinEvidenceGain = 0.1;
 }  // namespace
 
 void split_order_cycles(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p,
-                        const TetEdgeGraph& graph, State& st) {
+                        const TetEdgeGraph& graph, const std::vector<char>* crease_vertex, State& st) {
   const double h = p.hex_edge_length * s.diag;
   auto by_severity = [](std::vector<Extremum> v) {
     std::stable_sort(v.begin(), v.end(), [](const Extremum& u, const Extremum& w) { return u.severity > w.severity; });
@@ -524,7 +542,7 @@ void split_order_cycles(const Surface& s, const std::vector<Vec3>& normal, const
     std::vector<char> on_cycle;
     std::vector<LevelCut> cuts;
     double evidence = 0;
-    const int cycles = order_cycles(s, S, graph, h, &on_cycle, &cuts, &evidence);
+    const int cycles = order_cycles(s, S, graph, h, crease_vertex, &on_cycle, &cuts, &evidence);
     if (cycles == 0) return;
     const std::vector<Extremum> targeted = by_severity(level_crossings(s, S, p.edge_smoothing_iterations, cuts, h));
     const std::vector<Extremum> middle =
@@ -538,7 +556,7 @@ void split_order_cycles(const Surface& s, const std::vector<Vec3>& normal, const
       State trial = st;
       if (!cut_wedge(s, normal, S, x, all, p, trial)) continue;
       double ev = 0;
-      const int c2 = order_cycles(s, analyse(s, trial.label), graph, h, nullptr, nullptr, &ev);
+      const int c2 = order_cycles(s, analyse(s, trial.label), graph, h, crease_vertex, nullptr, nullptr, &ev);
       if (c2 > cycles || (c2 == cycles && ev > evidence - kMinEvidenceGain)) continue;
       st = std::move(trial);
       ++st.splits_cycle;

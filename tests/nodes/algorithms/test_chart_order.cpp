@@ -1,7 +1,9 @@
 // [chart-order] the order evidence of same-axis charts (chart_order.h) and the structure extraction's
 // order-cycle cuts (polycube_segment.h) on generated meshes.
 #include "nodes/algorithms/chart_order.h"
+#include "nodes/algorithms/shapes.h"
 #include "nodes/polycube_segment/polycube_segment.h"
+#include "nodes/tetrahedralize/tetgen.h"
 #include "tests/helpers/segment_fixtures.h"
 
 #include <catch2/catch.hpp>
@@ -9,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <map>
 #include <numeric>
 #include <stdexcept>
 
@@ -226,5 +229,73 @@ TEST_CASE("cycle_cuts: a group whose part near the group below sits above its pa
     for (auto& smp : o.distance_samples)
       if (smp.p == 0 && smp.q == 2) smp.q_at = 9.5, smp.delta = smp.q_at - smp.p_at;
     CHECK(cycle_cuts(o, cycle, 0.5).empty());
+  }
+}
+
+TEST_CASE("self bridges: a ring's top, on a step wall's top and at its foot, is one group the wall has no height in",
+          "[chart-order]") {
+  // stepped_ring: its top climbs from y = 0.3 to 0.4 around the ring and drops by a wall 0.1 high (-Z, at
+  // z = 0.5): the top is one +Y chart, on the wall's top edge (y = 0.4) and along its foot (y = 0.3)
+  const SurfaceMesh surface = make_shape({"stepped_ring", 24});
+  TetgenParams tp;
+  tp.edge_length = 0.05;
+  const TetMesh m = tetrahedralize(surface, tp);
+  // labels by the dominant normal (not a valid structure: the wall has three neighbours; the order evidence
+  // needs none)
+  const PolyCubeSegmentation s = geometric_structure(m);
+  Evidence e = evidence_inputs(m, s);
+  const TetEdgeGraph graph(m.T, int(m.V.rows()));
+  const double h = 0.02;
+  // the crease vertices: on a boundary edge whose two triangles turn by more than 40 degrees
+  std::vector<char> crease(size_t(m.V.rows()), 0);
+  std::map<std::pair<int, int>, std::vector<Eigen::Vector3d>> edge_normals;
+  for (int t = 0; t < s.F.rows(); ++t) {
+    const Eigen::Vector3d p0 = m.V.row(s.F(t, 0)), p1 = m.V.row(s.F(t, 1)), p2 = m.V.row(s.F(t, 2));
+    const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0).normalized();
+    for (int k = 0; k < 3; ++k) {
+      const int u = s.F(t, k), v = s.F(t, (k + 1) % 3);
+      edge_normals[{std::min(u, v), std::max(u, v)}].push_back(n);
+    }
+  }
+  for (auto& [edge, ns] : edge_normals)
+    if (ns.size() == 2 && ns[0].dot(ns[1]) < std::cos(40.0 * M_PI / 180))
+      crease[size_t(edge.first)] = crease[size_t(edge.second)] = 1;
+  for (int a = 0; a < 3; ++a) {
+    INFO("axis " << a);
+    CHECK(chart_order_evidence(m.V, graph, e.vertex_charts, e.chart_label, e.chart_neighbours, a, h)
+              .self_bridges.empty());  // looked for along creases only
+    AxisChartOrder o =
+        chart_order_evidence(m.V, graph, e.vertex_charts, e.chart_label, e.chart_neighbours, a, h, &crease);
+    if (a != 1) {
+      CHECK(o.self_bridges.empty());
+      continue;
+    }
+    REQUIRE(o.self_bridges.size() == 1);
+    const auto& sb = o.self_bridges[0];
+    CHECK(s.charts[size_t(sb.chart)].label == 5);  // the wall, facing -Z
+    int top_chart = -1;
+    for (size_t c = 0; c < s.charts.size(); ++c)
+      if (o.chart_group[c] == sb.group) top_chart = int(c);
+    REQUIRE(top_chart >= 0);
+    CHECK(s.charts[size_t(top_chart)].label == 2);
+    CHECK(sb.top == Approx(0.4).margin(1e-9));  // the wall's top edge and its foot, exactly
+    CHECK(sb.foot == Approx(0.3).margin(1e-9));
+  }
+  SECTION("the structure extraction cuts the top between the two heights: no order cycle is left") {
+    PolyCubeSegmentParams p;
+    p.hex_edge_length = h / m.V.colwise().maxCoeff().norm();      // about h; the order tests need only h < 0.05
+    const PolyCubeSegmentation cut = segment_polycube(m, p, &m);  // the undeformed tets: the input's creases
+    REQUIRE(cut.valid);
+    CHECK(cut.splits_order_cycle >= 1);
+    CHECK(cut.order_cycles == 0);
+    int tops = 0;
+    for (auto& c : cut.charts) tops += c.label == 2;
+    CHECK(tops >= 2);  // the high part and the low part of the top, each on its own plane
+    p.split_order_cycles = false;
+    const PolyCubeSegmentation whole = segment_polycube(m, p, &m);
+    REQUIRE(whole.valid);
+    int whole_tops = 0;
+    for (auto& c : whole.charts) whole_tops += c.label == 2;
+    CHECK(whole_tops == 1);
   }
 }

@@ -26,11 +26,11 @@ struct Meshed {
   double h = 0;  ///< the hex edge, absolute (the quality node's median boundary edge)
 };
 
-Meshed mesh_shape(const std::string& shape, double hex_edge) {
+Meshed mesh_shape(const std::string& shape, double hex_edge, const std::string& extra = "") {
   const fs::path out = test::fresh_dir("sharp_" + shape);
-  const auto r =
-      test::run_polyhex("run " + std::string(POLYHEX_SOURCE_DIR) + "/configs/default.json -i shape:" + shape +
-                        " --hex-edge " + std::to_string(hex_edge) + " --threads 2 --no-cache --out " + out.string());
+  const auto r = test::run_polyhex(
+      "run " + std::string(POLYHEX_SOURCE_DIR) + "/configs/default.json -i shape:" + shape + " --hex-edge " +
+      std::to_string(hex_edge) + " --threads 2 --no-cache --out " + out.string() + (extra.empty() ? "" : " " + extra));
   INFO(r.out);
   REQUIRE(r.code == 0);
   Meshed m;
@@ -125,4 +125,22 @@ TEST_CASE("sharp features: a filleted cylinder's sharp rim is on hex edges, its 
   CHECK(worst <= 0.25 * m.h);
   // the fillet is smooth: no hex feature edge far from the rim (mesh -> curve within a hex edge)
   CHECK(m.quality["feature_mesh_to_curve_max"].get<double>() * m.quality["bbox_diag"].get<double>() <= m.h);
+}
+
+TEST_CASE("sharp features: a ring whose top climbs and drops by a step keeps the step wall, Hausdorff max <= 0.5 h",
+          "[features][cli]") {
+  // stepped_ring's top is one smooth face on the step's top and at its foot: one plane for it flattens the wall
+  // (chart_order.h, self bridges) and the mesh ramps over the step; the structure extraction cuts the top
+  // between the two heights instead
+  const Meshed m = mesh_shape("stepped_ring", 0.025);
+  CHECK(m.quality["inverted"] == 0);
+  CHECK(m.quality["hausdorff_max"].get<double>() <= 0.5 * m.quality["hex_edge"].get<double>());
+  // the step's top edge (y = 0.4) and its foot (y = 0.3) along z = 0.5, away from the ends, near hex edges
+  // (0.25 h at this size on 2026-12-03)
+  auto middle = [&](const Eigen::Vector3d& p) { return p.x() > m.h && p.x() < 1.0 / 3 - m.h; };
+  CHECK(line_to_edges(m.mesh, {0, 0.4, 0.5}, {1.0 / 3, 0.4, 0.5}, m.h, middle) <= 0.3 * m.h);
+  CHECK(line_to_edges(m.mesh, {0, 0.3, 0.5}, {1.0 / 3, 0.3, 0.5}, m.h, middle) <= 0.3 * m.h);
+  // without the order-cycle cuts the step is flattened: the hex boundary stands about a hex edge off it
+  const Meshed flat = mesh_shape("stepped_ring", 0.025, "--set segment.split_order_cycles=false");
+  CHECK(flat.quality["hausdorff_max"].get<double>() > 0.8 * flat.quality["hex_edge"].get<double>());
 }

@@ -14,9 +14,9 @@ using namespace polyhex::test;
 
 namespace {
 const std::map<std::string, long> kGenus = {
-    {"sphere", 0},        {"torus", 1},         {"bumpy_torus", 1},      {"rod_with_holes", 2},
-    {"l_block", 0},       {"bent_pipe", 1},     {"fandisk_like", 0},     {"box", 0},
-    {"sharp_l_block", 0}, {"chamfered_box", 0}, {"filleted_cylinder", 0}};
+    {"sphere", 0},        {"torus", 1},         {"bumpy_torus", 1},       {"rod_with_holes", 2},
+    {"l_block", 0},       {"bent_pipe", 1},     {"fandisk_like", 0},      {"box", 0},
+    {"sharp_l_block", 0}, {"chamfered_box", 0}, {"filleted_cylinder", 0}, {"stepped_ring", 1}};
 }
 
 TEST_CASE("shape_names lists every shape once, and each has a known genus", "[shapes]") {
