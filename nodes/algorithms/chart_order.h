@@ -18,13 +18,12 @@
 ///
 /// The shortest such contradiction is one group alone (self bridges): a group that borders one chart of
 /// another axis along that chart's top and along its foot with charts of the same label (a step's floor on
-/// both), the foot lower by more than h/2. A plane per
-/// group gives that chart no height there: the map flattens it. A cuboid ring whose top climbs by ramps
-/// and drops back by one step wall is one: its top is one chart, on the wall's top and at its foot. They
-/// are looked for along the input's creases only (a part's step: top and foot each at least
-/// kSelfBridgeLength hex edges of crease): on a smooth surface the test also finds a group on both ends of
-/// a curved chart, mostly with one end under 1.5 hex edges long, and cutting those lowered the minimum
-/// scaled Jacobian of the organic models (docs/polycube_segment.md).
+/// both), the foot lower by more than h/2. A plane per group gives that chart no height there: the map
+/// flattens it. A cuboid ring whose top climbs by ramps and drops back by one step wall is one: its top is
+/// one chart, on the wall's top and at its foot. They are looked for along the input's creases only (a
+/// part's step: top and foot each at least kSelfBridgeLength hex edges of crease): on a smooth surface the
+/// test also finds a group on both ends of a curved chart, mostly with one end under 1.5 hex edges long,
+/// and cutting those lowered the minimum scaled Jacobian of the organic models (docs/polycube_segment.md).
 #pragma once
 
 #include "nodes/artefacts/meshes.h"
