@@ -35,8 +35,7 @@ PolyCubeSegmentation segment_once(const Surface& s, const PolyCubeSegmentParams&
   if (p.split_multi_orientation) split_multi_orientation(s, normal, h, p.max_splits, st);
   if (p.split_wedges) split_wedges(s, normal, p, st);
   if (p.split_ramps) split_ramps(s, normal, p, st);
-  const std::vector<char> crease_vertex = creases ? crease_vertices(s, *creases) : std::vector<char>{};
-  const std::vector<char>* on_crease = creases ? &crease_vertex : nullptr;
+  const std::vector<char>* on_crease = creases ? &creases->vertex : nullptr;
   if (p.split_order_cycles) split_order_cycles(s, normal, p, *graph, on_crease, st);
   if (p.final_cleanup) remove_small_invalid(s, normal, p, st);
   repair(s, normal, p, st);

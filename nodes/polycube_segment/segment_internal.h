@@ -60,6 +60,7 @@ std::vector<Vec3> smoothed_normals(const Surface& s, int iterations,
 /// faces between all its creases (crease_faces).
 struct InputCreases {
   std::vector<std::array<char, 3>> edge;  ///< #F by 3: edge k of triangle t (vertices k, k+1) is a crease
+  std::vector<char> vertex;               ///< per vertex of the surface: on one of those creases
   std::vector<int> patch;                 ///< #F: the input's face (crease_faces, features.h)
   int patches = 0;
   std::vector<char> planar;  ///< per patch: the input's normals within kPlanarFace degrees of their mean
@@ -148,9 +149,6 @@ void split_ramps(const Surface& s, const std::vector<Vec3>& normal, const PolyCu
 int order_cycles(const Surface& s, const Structure& S, const TetEdgeGraph& graph, double h,
                  const std::vector<char>* crease_vertex, std::vector<char>* cycle_charts,
                  std::vector<LevelCut>* cuts = nullptr, double* dropped_evidence = nullptr);
-
-/// The vertices of the surface on an input crease (InputCreases::edge).
-std::vector<char> crease_vertices(const Surface& s, const InputCreases& creases);
 
 void split_order_cycles(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p,
                         const TetEdgeGraph& graph, const std::vector<char>* crease_vertex, State& st);

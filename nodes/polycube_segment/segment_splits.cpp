@@ -462,14 +462,6 @@ void split_ramps(const Surface& s, const std::vector<Vec3>& normal, const PolyCu
       [](const Extremum&) { return true; });
 }
 
-std::vector<char> crease_vertices(const Surface& s, const InputCreases& creases) {
-  std::vector<char> on(size_t(s.V->rows()), 0);
-  for (int t = 0; t < s.nf(); ++t)
-    for (int k = 0; k < 3; ++k)
-      if (creases.edge[size_t(t)][size_t(k)]) on[size_t((*s.F)(t, k))] = on[size_t((*s.F)(t, (k + 1) % 3))] = 1;
-  return on;
-}
-
 int order_cycles(const Surface& s, const Structure& S, const TetEdgeGraph& graph, double h,
                  const std::vector<char>* crease_vertex, std::vector<char>* cycle_charts, std::vector<LevelCut>* cuts,
                  double* dropped_evidence) {

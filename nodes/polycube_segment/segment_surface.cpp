@@ -112,11 +112,14 @@ InputCreases input_creases(const Surface& s, const RowMatrixX3d& X, double h) {
   const std::vector<std::array<int, 2>> part = crease_edges(flat_face_creases(surface, all, h));
   const int nf = s.nf();
   c.edge.assign(size_t(nf), {0, 0, 0});
+  c.vertex.assign(size_t(s.V->rows()), 0);
   for (int t = 0; t < nf; ++t)
     for (int k = 0; k < 3; ++k) {
       const int a = (*s.F)(t, k), b = (*s.F)(t, (k + 1) % 3);
-      c.edge[size_t(t)][size_t(k)] =
+      const bool crease =
           std::binary_search(part.begin(), part.end(), std::array<int, 2>{std::min(a, b), std::max(a, b)});
+      c.edge[size_t(t)][size_t(k)] = crease;
+      if (crease) c.vertex[size_t(a)] = c.vertex[size_t(b)] = 1;
     }
   return c;
 }

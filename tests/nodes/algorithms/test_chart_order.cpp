@@ -3,6 +3,7 @@
 #include "nodes/algorithms/chart_order.h"
 #include "nodes/algorithms/shapes.h"
 #include "nodes/polycube_segment/polycube_segment.h"
+#include "nodes/polycube_segment/segment_internal.h"
 #include "nodes/tetrahedralize/tetgen.h"
 #include "tests/helpers/segment_fixtures.h"
 
@@ -11,7 +12,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <map>
 #include <numeric>
 #include <stdexcept>
 
@@ -246,20 +246,9 @@ TEST_CASE("self bridges: a ring's top, on a step wall's top and at its foot, is 
   Evidence e = evidence_inputs(m, s);
   const TetEdgeGraph graph(m.T, int(m.V.rows()));
   const double h = 0.02;
-  // the crease vertices: on a boundary edge whose two triangles turn by more than 40 degrees
-  std::vector<char> crease(size_t(m.V.rows()), 0);
-  std::map<std::pair<int, int>, std::vector<Eigen::Vector3d>> edge_normals;
-  for (int t = 0; t < s.F.rows(); ++t) {
-    const Eigen::Vector3d p0 = m.V.row(s.F(t, 0)), p1 = m.V.row(s.F(t, 1)), p2 = m.V.row(s.F(t, 2));
-    const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0).normalized();
-    for (int k = 0; k < 3; ++k) {
-      const int u = s.F(t, k), v = s.F(t, (k + 1) % 3);
-      edge_normals[{std::min(u, v), std::max(u, v)}].push_back(n);
-    }
-  }
-  for (auto& [edge, ns] : edge_normals)
-    if (ns.size() == 2 && ns[0].dot(ns[1]) < std::cos(40.0 * M_PI / 180))
-      crease[size_t(edge.first)] = crease[size_t(edge.second)] = 1;
+  // the crease vertices, as the structure extraction finds them (the input's creases along flat faces)
+  const segment_detail::Surface surf = segment_detail::build_surface(m.V, s.F);
+  const std::vector<char> crease = segment_detail::input_creases(surf, m.V, h).vertex;
   for (int a = 0; a < 3; ++a) {
     INFO("axis " << a);
     CHECK(chart_order_evidence(m.V, graph, e.vertex_charts, e.chart_label, e.chart_neighbours, a, h)
