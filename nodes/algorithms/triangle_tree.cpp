@@ -159,4 +159,49 @@ TriangleTree::Hit TriangleTree::closest(const Eigen::Vector3d& p) const {
 
 double TriangleTree::distance(const Eigen::Vector3d& p) const { return std::sqrt(closest(p).sq_distance); }
 
+std::pair<double, int> TriangleTree::first_crossing(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                                                    double t_min) const {
+  double best = std::numeric_limits<double>::infinity();
+  int hit = -1;
+  const Eigen::Vector3d inv = d.cwiseInverse();  // +-inf on a zero component: the slabs below stay exact
+  // the ray's parameter interval inside a node's box (slab test), empty when it misses or lies beyond `best`
+  const auto enters = [&](const Node& n) {
+    double lo = t_min, hi = best;
+    for (int k = 0; k < 3; ++k) {
+      if (d[k] == 0) {
+        if (o[k] < n.lo[k] || o[k] > n.hi[k]) return false;
+        continue;
+      }
+      double t0 = (n.lo[k] - o[k]) * inv[k], t1 = (n.hi[k] - o[k]) * inv[k];
+      if (t0 > t1) std::swap(t0, t1);
+      lo = std::max(lo, t0);
+      hi = std::min(hi, t1);
+    }
+    return lo <= hi;
+  };
+  int stack[128];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& n = nodes_[stack[--top]];
+    if (!enters(n)) continue;
+    if (n.left >= 0) {
+      stack[top++] = n.right;
+      stack[top++] = n.left;
+      continue;
+    }
+    for (int i = n.begin; i < n.end; ++i) {
+      const Eigen::Vector3d e1 = b_[i] - a_[i], e2 = c_[i] - a_[i], p = d.cross(e2);
+      const double det = e1.dot(p);
+      if (!(std::abs(det) > 1e-300)) continue;
+      const Eigen::Vector3d s = o - a_[i], q = s.cross(e1);
+      const double u = s.dot(p) / det, v = d.dot(q) / det, t = e2.dot(q) / det;
+      if (u < 0 || v < 0 || u + v > 1 || !(t > t_min) || !(t < best)) continue;
+      best = t;
+      hit = id_[i];
+    }
+  }
+  return {best, hit};
+}
+
 }  // namespace polyhex

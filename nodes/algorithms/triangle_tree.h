@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 
+#include <utility>
 #include <vector>
 
 namespace polyhex {
@@ -43,6 +44,11 @@ class TriangleTree {
   Hit closest(const Eigen::Vector3d& p) const;
   /// Euclidean distance from p to the triangle set.
   double distance(const Eigen::Vector3d& p) const;
+  /// The first crossing of the ray o + t d (t > t_min) with a triangle: its t (in units of |d|) and the
+  /// triangle (Moller-Trumbore; a ray in a triangle's plane does not cross it). {infinity, -1} when it
+  /// crosses none.
+  /// \pre d is not zero
+  std::pair<double, int> first_crossing(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min) const;
   int triangles() const { return int(a_.size()); }
 
  private:

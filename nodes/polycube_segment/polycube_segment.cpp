@@ -34,7 +34,7 @@ PolyCubeSegmentation segment_once(const Surface& s, const PolyCubeSegmentParams&
   const double h = p.hex_edge_length * s.diag;
   if (p.split_multi_orientation) split_multi_orientation(s, normal, h, p.max_splits, st);
   if (p.split_wedges) split_wedges(s, normal, p, st);
-  if (p.split_ramps) split_ramps(s, normal, p, st);
+  if (p.split_ramps) split_ramps(s, normal, p, creases, st);
   const std::vector<char>* on_crease = creases ? &creases->vertex : nullptr;
   if (p.split_order_cycles) split_order_cycles(s, normal, p, *graph, on_crease, st);
   if (p.final_cleanup) remove_small_invalid(s, normal, p, st);

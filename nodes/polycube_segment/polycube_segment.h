@@ -32,6 +32,9 @@ struct PolyCubeSegmentParams {
   int max_cut_candidates = 200;  ///< cut candidates tested per wedge, cheapest first
   bool split_ramps = true;       ///< cut charts that climb far along their own axis (extension of §5.1, below)
   double ramp_extent = 12.0;  ///< a chart is a ramp when its vertices span more than this many hex edges along its axis
+  double ramp_extent_planar = 3.0;  ///< the same for a flat chart of the input (98 % of its area within 20
+                                    ///< degrees of its direction; with the input tets) that also climbs more
+                                    ///< than half the solid's depth behind it
   bool split_order_cycles =
       true;  ///< cut charts whose same-axis order evidence forms a cycle, or that sit on both ends of a step wall
              ///< along the input's creases (chart_order.h self bridges; extension of §5.1, below)

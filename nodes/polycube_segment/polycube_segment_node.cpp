@@ -53,6 +53,9 @@ const bool registered = register_node(
             .add("max_cut_candidates", &P::max_cut_candidates, "cut candidates tested per wedge", 1, 100000)
             .add("split_ramps", &P::split_ramps, "cut charts that climb far along their own axis (extension)")
             .add("ramp_extent", &P::ramp_extent, "a ramp spans more than this many hex edges along its axis", 0, 1e6)
+            .add("ramp_extent_planar", &P::ramp_extent_planar,
+                 "the same for a flat chart of the input that climbs more than half the solid's depth behind it", 0,
+                 1e6)
             .add("split_order_cycles", &P::split_order_cycles,
                  "cut charts whose same-axis order evidence forms a cycle, or that sit on both ends of a step "
                  "wall along the input's creases (extension)")
@@ -86,7 +89,7 @@ const bool registered = register_node(
           }
           return make_artefact(std::make_shared<const PolyCubeSegmentation>(std::move(s)));
         })
-        .with_version("13"));
+        .with_version("14"));
 
 }  // namespace
 }  // namespace polyhex

@@ -64,6 +64,7 @@ struct InputCreases {
   std::vector<int> patch;                 ///< #F: the input's face (crease_faces, features.h)
   int patches = 0;
   std::vector<char> planar;  ///< per patch: the input's normals within kPlanarFace degrees of their mean
+  std::vector<Vec3> normal;  ///< #F: the input's unit normal
 };
 
 /// The creases of the input tet mesh's boundary (same triangles as the segmented surface).
@@ -139,7 +140,10 @@ struct LevelCut {
   double level, severity;
 };
 
-void split_ramps(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p, State& st);
+/// Ramps; with `creases`, a flat chart of the input (98 % of its area within 20 degrees of its direction) is
+/// a ramp from p.ramp_extent_planar hex edges when it also climbs more than half the solid's depth behind it.
+void split_ramps(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p,
+                 const InputCreases* creases, State& st);
 
 /// Same-axis chart pairs whose order evidence closes a cycle (chart_order.h), and self bridges along the
 /// input's creases (`crease_vertex`, per vertex of the surface: on one; none looked for without it), summed

@@ -2,6 +2,7 @@
 /// @brief The §5.1 splits (multi-orientation charts, wedges) and the ramp and order-cycle cuts.
 #include "nodes/algorithms/chart_order.h"
 #include "nodes/algorithms/reference_length.h"
+#include "nodes/algorithms/triangle_tree.h"
 #include "nodes/polycube_segment/segment_internal.h"
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
@@ -424,14 +425,55 @@ std::vector<Extremum> level_crossings(const Surface& s, const Structure& S, int 
   return out;
 }
 
+/// A flat chart of the input is a ramp only when it climbs more than this share of the solid's depth
+/// behind it: flattening it puts its low and its high end on one plane, so the map then stretches or
+/// squeezes the solid behind it by more than half its depth.
+constexpr double kRampDepthShare = 0.5;
+
+/// Of a flat chart (creases->normal: 98 % of its input area within 20 degrees of its direction): the
+/// area-weighted median depth of the solid behind it, along its axis into the solid (the first crossing
+/// of the surface from each triangle's centroid).
+double depth_behind(const Surface& s, const Structure& S, int c, const std::vector<int>& tris,
+                    const TriangleTree& tree) {
+  const int l = S.label[c], ax = label_axis(l);
+  Vec3 inward = Vec3::Zero();
+  inward[ax] = l % 2 == 0 ? -1 : 1;
+  std::vector<std::pair<double, double>> depth;  // (depth, area)
+  double total = 0;
+  for (int t : tris) {
+    const Vec3 o = (s.pos((*s.F)(t, 0)) + s.pos((*s.F)(t, 1)) + s.pos((*s.F)(t, 2))) / 3.0;
+    depth.emplace_back(tree.first_crossing(o, inward, 1e-9 * s.diag).first, s.area[t]);
+    total += s.area[t];
+  }
+  std::sort(depth.begin(), depth.end());
+  double sum = 0;
+  for (const auto& [d, a] : depth)
+    if ((sum += a) >= 0.5 * total) return d;
+  return depth.empty() ? kInf : depth.back().first;
+}
+
 /// Ramps (extension of §5.1, polycube_segment.h): charts whose vertices span more than `extent`
 /// along their own axis (2nd to 98th percentile of the deformed coordinate), cut across their middle
 /// level (level_crossings, severity = the chart's span). `only`: when given, the charts to consider.
+/// With `creases` and `tree` (the surface's triangles), a flat chart of the input is a ramp from
+/// `planar_extent` when it also climbs more than kRampDepthShare of the depth behind it.
 std::vector<Extremum> find_ramps(const Surface& s, const Structure& S, int smoothing, double extent, double h,
-                                 const std::vector<char>* only = nullptr) {
-  std::vector<std::vector<int>> verts(S.n);
-  for (int t = 0; t < s.nf(); ++t)
+                                 const std::vector<char>* only = nullptr, const InputCreases* creases = nullptr,
+                                 const TriangleTree* tree = nullptr, double planar_extent = kInf) {
+  std::vector<std::vector<int>> verts(S.n), tris(S.n);
+  for (int t = 0; t < s.nf(); ++t) {
+    tris[S.chart[t]].push_back(t);
     for (int v : (*s.F).row(t)) verts[S.chart[t]].push_back(v);
+  }
+  // the input's area within 20 degrees of the chart's direction
+  std::vector<double> area(S.n, 0.0), flat(S.n, 0.0);
+  if (creases && tree)
+    for (int t = 0; t < s.nf(); ++t) {
+      const int l = S.label[S.chart[t]];
+      const double along = creases->normal[size_t(t)][label_axis(l)] * (l % 2 == 0 ? 1 : -1);
+      area[S.chart[t]] += s.area[t];
+      if (along >= std::cos(20.0 * M_PI / 180)) flat[S.chart[t]] += s.area[t];
+    }
   std::vector<LevelCut> cuts;
   for (int c = 0; c < S.n; ++c) {
     auto& vs = verts[c];
@@ -446,19 +488,26 @@ std::vector<Extremum> find_ramps(const Surface& s, const Structure& S, int smoot
     double xlo = x[lo];
     std::nth_element(x.begin(), x.begin() + hi, x.end());
     double xhi = x[hi];
-    if (xhi - xlo <= extent) continue;
-    cuts.push_back({c, 0.5 * (xlo + xhi), xhi - xlo});
+    const double span = xhi - xlo;
+    const bool ramp = span > extent || (tree && span > planar_extent && flat[c] >= 0.98 * area[c] &&
+                                        span > kRampDepthShare * depth_behind(s, S, c, tris[c], *tree));
+    if (ramp) cuts.push_back({c, 0.5 * (xlo + xhi), span});
   }
   return level_crossings(s, S, smoothing, cuts, h);
 }
 
 }  // namespace
 
-void split_ramps(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p, State& st) {
+void split_ramps(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p,
+                 const InputCreases* creases, State& st) {
   const double h = p.hex_edge_length * s.diag;
+  const std::unique_ptr<TriangleTree> tree = creases ? std::make_unique<TriangleTree>(*s.V, *s.F) : nullptr;
   cut_repeatedly(
       s, normal, p, st, st.splits_ramp,
-      [&](const Structure& S) { return find_ramps(s, S, p.edge_smoothing_iterations, p.ramp_extent * h, h); },
+      [&](const Structure& S) {
+        return find_ramps(s, S, p.edge_smoothing_iterations, p.ramp_extent * h, h, nullptr, creases, tree.get(),
+                          p.ramp_extent_planar * h);
+      },
       [](const Extremum&) { return true; });
 }
 

@@ -108,6 +108,12 @@ InputCreases input_creases(const Surface& s, const RowMatrixX3d& X, double h) {
   c.patch.assign(faces.patch.data(), faces.patch.data() + faces.patch.size());
   c.patches = faces.faces;
   c.planar = std::move(faces.planar);
+  c.normal.resize(size_t(s.nf()));
+  for (int t = 0; t < s.nf(); ++t) {
+    const Vec3 a = X.row((*s.F)(t, 0)), b = X.row((*s.F)(t, 1)), d = X.row((*s.F)(t, 2));
+    const Vec3 n = (b - a).cross(d - a);
+    c.normal[size_t(t)] = n.norm() > 0 ? Vec3(n.normalized()) : Vec3::Zero();
+  }
   // a barrier to the normals' smoothing is a crease along a flat face, not a scan's faceting
   const std::vector<std::array<int, 2>> part = crease_edges(flat_face_creases(surface, all, h));
   const int nf = s.nf();

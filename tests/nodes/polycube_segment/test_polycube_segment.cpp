@@ -484,3 +484,38 @@ TEST_CASE("polycube_segment node: metrics, VTK output and failure", "[segment]")
   CHECK_THROWS_AS(spec->check_params(json{{"hex_edge_length", 0}}, "seg"), ConfigError);
   std::filesystem::remove_all(dir);
 }
+
+TEST_CASE("flat ramps: a plane that climbs more than half the solid's depth behind it is cut, a deep one is not",
+          "[segment]") {
+  // a 1 x 0.5 slab whose flat top climbs 0.08 along x (4.6 degrees: labelled +Z, flat in the input): about 7
+  // hex edges (h = 1 % of the diagonal), under ramp_extent (12) and over ramp_extent_planar (3)
+  auto wedge = [](int layers, double thick) {
+    return voxel_tets(
+        {20, 10, layers}, 0.05, [](int, int, int) { return true; },
+        [=](const Point& q) { return Point(q.x(), q.y(), q.z() / (0.05 * layers) * (thick + 0.08 * q.x())); });
+  };
+  auto tops = [](const PolyCubeSegmentation& s) {
+    int n = 0;
+    for (auto& c : s.charts) n += c.label == 4;
+    return n;
+  };
+  PolyCubeSegmentParams p;
+  p.fallback_retries = 0;
+  SECTION("thin: 0.06 deep at its low end, so the climb is more than half the median depth (about 0.10)") {
+    const TetMesh m = wedge(2, 0.06);
+    const PolyCubeSegmentation s = segment_polycube(m, p, &m);  // the input's own tets: flat faces known
+    CHECK(s.valid);
+    CHECK(s.splits_ramp >= 1);
+    CHECK(tops(s) >= 2);
+    const PolyCubeSegmentation blind = segment_polycube(m, p);  // without the input: the 12 h rule alone
+    CHECK(blind.splits_ramp == 0);
+    CHECK(tops(blind) == 1);
+  }
+  SECTION("deep: 0.4 deep, the same climb is a fifth of the depth: one flat top") {
+    const TetMesh m = wedge(8, 0.4);
+    const PolyCubeSegmentation s = segment_polycube(m, p, &m);
+    CHECK(s.valid);
+    CHECK(s.splits_ramp == 0);
+    CHECK(tops(s) == 1);
+  }
+}
