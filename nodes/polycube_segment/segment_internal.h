@@ -140,8 +140,9 @@ struct LevelCut {
   double level, severity;
 };
 
-/// Ramps; with `creases`, a flat chart of the input (98 % of its area within 20 degrees of its direction) is
-/// a ramp from p.ramp_extent_planar hex edges when it also climbs more than half the solid's depth behind it.
+/// Ramps; with `creases`, a flat chart of the input (98 % of its area with an input normal within 20 degrees
+/// of its direction) is a ramp from p.ramp_extent_planar hex edges when it also climbs more than half the
+/// solid's depth behind it.
 void split_ramps(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p,
                  const InputCreases* creases, State& st);
 

@@ -430,8 +430,8 @@ std::vector<Extremum> level_crossings(const Surface& s, const Structure& S, int 
 /// squeezes the solid behind it by more than half its depth.
 constexpr double kRampDepthShare = 0.5;
 
-/// Of a flat chart (creases->normal: 98 % of its input area within 20 degrees of its direction): the
-/// area-weighted median depth of the solid behind it, along its axis into the solid (the first crossing
+/// Of a flat chart (98 % of its area with an input normal, creases->normal, within 20 degrees of its
+/// direction): the area-weighted median depth of the solid behind it, along its axis into the solid (the first crossing
 /// of the surface from each triangle's centroid).
 double depth_behind(const Surface& s, const Structure& S, int c, const std::vector<int>& tris,
                     const TriangleTree& tree) {
@@ -465,7 +465,7 @@ std::vector<Extremum> find_ramps(const Surface& s, const Structure& S, int smoot
     tris[S.chart[t]].push_back(t);
     for (int v : (*s.F).row(t)) verts[S.chart[t]].push_back(v);
   }
-  // the input's area within 20 degrees of the chart's direction
+  // per chart, its area and the part of it whose input normal is within 20 degrees of the chart's direction
   std::vector<double> area(S.n, 0.0), flat(S.n, 0.0);
   if (creases && tree)
     for (int t = 0; t < s.nf(); ++t) {
