@@ -450,6 +450,31 @@ RunResult Pipeline::run(const RunOptions& opt) const {
   return result;
 }
 
+std::vector<const NodeRecord*> inverted_mesh_reports(const Pipeline& p, const RunResult& r) {
+  const auto stage = [](const std::string& type) { return type.substr(0, type.find('/')); };
+  std::map<std::string, int> branch;  // node id -> its branch (0: not in one)
+  for (const ResolvedNode& n : p.nodes()) branch[n.id] = n.branch;
+  int kept = 0;  // the branch whose mesh was kept; 0: none chosen, every branch counts
+  for (const NodeRecord& n : r.nodes) {
+    if (stage(n.type) != "select_hexes" || !n.metrics.contains("chosen") || !n.metrics["chosen"].is_number_integer())
+      continue;
+    for (const ResolvedNode& rn : p.nodes()) {
+      const size_t port = n.metrics["chosen"].get<size_t>() - 1;
+      if (rn.id == n.id && port < rn.input_nodes.size() && rn.input_nodes[port] >= 0)
+        kept = p.nodes()[size_t(rn.input_nodes[port])].branch;
+    }
+  }
+  std::vector<const NodeRecord*> out;
+  for (const NodeRecord& n : r.nodes) {
+    if (stage(n.type) != "optimize" && stage(n.type) != "quality") continue;
+    const auto b = branch.find(n.id);
+    if (kept > 0 && b != branch.end() && b->second != 0 && b->second != kept) continue;
+    if (n.metrics.contains("inverted") && n.metrics["inverted"].is_number() && n.metrics["inverted"].get<double>() > 0)
+      out.push_back(&n);
+  }
+  return out;
+}
+
 json RunResult::report() const {
   json r;
   r["polyhex_version"] = POLYHEX_VERSION;

@@ -103,4 +103,11 @@ class Pipeline {
 /// Writes `report.json` into `dir` atomically.
 void write_report(const RunResult& r, const std::filesystem::path& dir);
 
+/// The nodes of a run of `p` that report inverted hexes (an `inverted` metric above 0) in the mesh the run
+/// kept: its `optimize` and `quality` nodes, except those of a branch (config `branches`) other than the one
+/// whose mesh the `select_hexes` node chose (its `chosen` port's producer; every branch when there is no
+/// such node). polyhex run exits with 3 when there is one: a mesh a solver would reject is not a success,
+/// and a branch that was not kept wrote no mesh.
+std::vector<const NodeRecord*> inverted_mesh_reports(const Pipeline& p, const RunResult& r);
+
 }  // namespace polyhex

@@ -61,19 +61,13 @@ int cmd_run(const RunRequest& req, bool html) {
   }
   std::fprintf(stderr, "polyhex: done in %.2f s; report: %s\n", r.seconds, (req.out_dir / "report.json").c_str());
   if (html) std::fprintf(stderr, "polyhex: wrote %s\n", write_report_html(req.out_dir).c_str());
-  // A mesh a solver would reject is not a success: the final optimization or the quality report saw
+  // A mesh a solver would reject is not a success: the kept mesh's optimization or its quality report saw
   // inverted hexes.
-  int code = 0;
-  for (const NodeRecord& n : r.nodes) {
-    std::string stage = n.type.substr(0, n.type.find('/'));
-    if ((stage == "quality" || stage == "optimize") && n.metrics.contains("inverted") &&
-        n.metrics["inverted"].is_number() && n.metrics["inverted"].get<double>() > 0) {
-      std::fprintf(stderr, "polyhex: node `%s` (`%s`) reports %s inverted hexes\n", n.id.c_str(), n.type.c_str(),
-                   n.metrics["inverted"].dump().c_str());
-      code = 3;
-    }
-  }
-  return code;
+  const std::vector<const NodeRecord*> inverted = inverted_mesh_reports(p, r);
+  for (const NodeRecord* n : inverted)
+    std::fprintf(stderr, "polyhex: node `%s` (`%s`) reports %s inverted hexes\n", n->id.c_str(), n->type.c_str(),
+                 n->metrics["inverted"].dump().c_str());
+  return inverted.empty() ? 0 : 3;
 }
 
 int cmd_nodes(bool as_json) {

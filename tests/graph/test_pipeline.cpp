@@ -351,3 +351,33 @@ TEST_CASE("save-all never replaces a file the config writes: a clashing artefact
   CHECK(std::filesystem::exists(opt.out_dir / "surface.obj"));    // no clash: the plain name
   CHECK_FALSE(std::filesystem::exists(opt.out_dir / "surface.node.obj"));
 }
+
+TEST_CASE("inverted hexes fail a run only in the mesh it kept, not in a branch it dropped", "[graph]") {
+  // the default config: three frame branches (optimize#1..3) feeding select_hexes `best`, then `quality`
+  std::ifstream in(std::filesystem::path(POLYHEX_SOURCE_DIR) / "configs" / "polycube.json");
+  json config = json::parse(in);
+  config["vars"]["input"] = "part.stl";  // what `polyhex run --input` sets; the pipeline is built, not run
+  const Pipeline p = Pipeline::build(parse_config(config, "polycube.json"));
+  auto record = [](const std::string& id, const std::string& type, json metrics) {
+    NodeRecord n;
+    n.id = id, n.type = type, n.ran = true, n.metrics = std::move(metrics);
+    return n;
+  };
+  RunResult r;
+  r.nodes = {record("optimize#1", "optimize/default", {{"inverted", 0}}),
+             record("optimize#2", "optimize/default", {{"inverted", 2}}),
+             record("best", "select_hexes/default", {{"chosen", 1}}),
+             record("quality", "quality/default", {{"inverted", 0}})};
+  CHECK(inverted_mesh_reports(p, r).empty());  // branch 2 folded, branch 1 was kept and written
+  r.nodes[2].metrics["chosen"] = 2;
+  auto reports = inverted_mesh_reports(p, r);
+  REQUIRE(reports.size() == 1);
+  CHECK(reports[0]->id == "optimize#2");
+  r.nodes[2].metrics = json::object();  // no choice made: every branch counts
+  CHECK(inverted_mesh_reports(p, r).size() == 1);
+  r.nodes[2].metrics["chosen"] = 1;
+  r.nodes[3].metrics["inverted"] = 1;  // the kept mesh itself
+  reports = inverted_mesh_reports(p, r);
+  REQUIRE(reports.size() == 1);
+  CHECK(reports[0]->id == "quality");
+}
