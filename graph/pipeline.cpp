@@ -458,11 +458,10 @@ std::vector<const NodeRecord*> inverted_mesh_reports(const Pipeline& p, const Ru
   for (const NodeRecord& n : r.nodes) {
     if (stage(n.type) != "select_hexes" || !n.metrics.contains("chosen") || !n.metrics["chosen"].is_number_integer())
       continue;
-    for (const ResolvedNode& rn : p.nodes()) {
-      const size_t port = n.metrics["chosen"].get<size_t>() - 1;
-      if (rn.id == n.id && port < rn.input_nodes.size() && rn.input_nodes[port] >= 0)
-        kept = p.nodes()[size_t(rn.input_nodes[port])].branch;
-    }
+    const long port = n.metrics["chosen"].get<long>() - 1;  // candidate_1 is port 0
+    for (const ResolvedNode& rn : p.nodes())
+      if (rn.id == n.id && port >= 0 && size_t(port) < rn.input_nodes.size() && rn.input_nodes[size_t(port)] >= 0)
+        kept = p.nodes()[size_t(rn.input_nodes[size_t(port)])].branch;
   }
   std::vector<const NodeRecord*> out;
   for (const NodeRecord& n : r.nodes) {
