@@ -452,22 +452,24 @@ RunResult Pipeline::run(const RunOptions& opt) const {
 
 std::vector<const NodeRecord*> inverted_mesh_reports(const Pipeline& p, const RunResult& r) {
   const auto stage = [](const std::string& type) { return type.substr(0, type.find('/')); };
-  std::map<std::string, int> branch;  // node id -> its branch (0: not in one)
-  for (const ResolvedNode& n : p.nodes()) branch[n.id] = n.branch;
+  std::map<std::string, const ResolvedNode*> node;  // by id
+  for (const ResolvedNode& n : p.nodes()) node[n.id] = &n;
   int kept = 0;  // the branch whose mesh was kept; 0: none chosen, every branch counts
   for (const NodeRecord& n : r.nodes) {
-    if (stage(n.type) != "select_hexes" || !n.metrics.contains("chosen") || !n.metrics["chosen"].is_number_integer())
+    const auto sel = node.find(n.id);
+    if (stage(n.type) != "select_hexes" || sel == node.end() || !n.metrics.contains("chosen") ||
+        !n.metrics["chosen"].is_number_integer())
       continue;
     const long port = n.metrics["chosen"].get<long>() - 1;  // candidate_1 is port 0
-    for (const ResolvedNode& rn : p.nodes())
-      if (rn.id == n.id && port >= 0 && size_t(port) < rn.input_nodes.size() && rn.input_nodes[size_t(port)] >= 0)
-        kept = p.nodes()[size_t(rn.input_nodes[size_t(port)])].branch;
+    const std::vector<int>& from = sel->second->input_nodes;
+    if (port >= 0 && size_t(port) < from.size() && from[size_t(port)] >= 0)
+      kept = p.nodes()[size_t(from[size_t(port)])].branch;
   }
   std::vector<const NodeRecord*> out;
   for (const NodeRecord& n : r.nodes) {
     if (stage(n.type) != "optimize" && stage(n.type) != "quality") continue;
-    const auto b = branch.find(n.id);
-    if (kept > 0 && b != branch.end() && b->second != 0 && b->second != kept) continue;
+    const auto b = node.find(n.id);
+    if (kept > 0 && b != node.end() && b->second->branch != 0 && b->second->branch != kept) continue;
     if (n.metrics.contains("inverted") && n.metrics["inverted"].is_number() && n.metrics["inverted"].get<double>() > 0)
       out.push_back(&n);
   }
