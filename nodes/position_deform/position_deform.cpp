@@ -2,6 +2,7 @@
 
 #include "nodes/algorithms/chart_order.h"
 #include "nodes/algorithms/features.h"
+#include "nodes/algorithms/incomplete_lut.h"
 #include "nodes/algorithms/reference_length.h"
 #include "nodes/position_deform/feature_lines.h"
 #include "runtime/cancel.h"
@@ -395,7 +396,7 @@ void final_mvc(const PoissonStep& ps, const AxisInputs& in, const std::vector<in
   }
   if (!done) {
     ++st.final_ilu_axes;
-    Eigen::BiCGSTAB<Eigen::SparseMatrix<double, Eigen::RowMajor>, Eigen::IncompleteLUT<double>> solver;
+    Eigen::BiCGSTAB<Eigen::SparseMatrix<double, Eigen::RowMajor>, FastIncompleteLUT> solver;  // Eigen's factor, faster
     solver.preconditioner().setDroptol(1e-4);
     solver.preconditioner().setFillfactor(10);
     solver.setTolerance(tol);
