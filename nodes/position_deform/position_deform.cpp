@@ -9,6 +9,7 @@
 #include "runtime/errors.h"
 #include "runtime/factorization.h"
 #include "runtime/stopwatch.h"
+#include "runtime/two_phase.h"
 
 #include <Eigen/Dense>
 #include <Eigen/IterativeLinearSolvers>
@@ -415,9 +416,6 @@ void final_mvc(const PoissonStep& ps, const AxisInputs& in, const std::vector<in
     if (vgroup[v] < 0) u[v] = yf[var[v]];
 }
 
-/// One axis a of §5.2 (steps 1-4 of the header): the a-coordinate of the map, out.U.col(a), and the
-/// planes of the a-charts, out.chart_plane. The three axes are independent (their own charts, Voronoi
-/// partition, Poisson and final systems) and run in parallel, each into its own statistics.
 /// The levels of the feature lines across axis a (feature_lines.h): the rounded mean of their vertices'
 /// Poisson values, unless that is the level of an a-chart beside the line's chart (the line would lie on the
 /// chart's edge). Returns per vertex its pinned value (NaN: free) and appends the pinned vertices.
@@ -439,9 +437,24 @@ std::vector<double> feature_line_pins(int a, const AxisInputs& in, const AxisCha
   return pin;
 }
 
-void solve_axis(int a, const AxisInputs& in, PolyCubeMap& out, PositionDeformStats& st, std::vector<int>& pinned) {
+/// One axis a of §5.2 (steps 1-4 of the header) gives the a-coordinate of the map, out.U.col(a), and the
+/// planes of the a-charts, out.chart_plane. The three axes are independent (their own charts, Voronoi
+/// partition, Poisson and final systems), each into its own statistics, and run in two phases
+/// (runtime/two_phase.h): steps 1-3 (axis_levels), then the final solve (axis_final). This is what the
+/// first phase hands to the second.
+struct AxisLevels {
+  AxisChartOrder order;
+  PoissonStep ps;
+  std::vector<long> k;      ///< per chart group its plane's level
+  std::vector<double> pin;  ///< per vertex: the feature line level it is pinned to (NaN: free)
+};
+
+/// Steps 1-3 of axis a: the order evidence, the Poisson step, the chart planes (written to
+/// out.chart_plane for the a-charts) and the feature lines' levels.
+AxisLevels axis_levels(int a, const AxisInputs& in, PolyCubeMap& out, PositionDeformStats& st,
+                       std::vector<int>& pinned) {
   throw_if_interrupted();  // safe point: per axis
-  const int nV = int(in.input.V.rows()), nC = int(in.seg.charts.size());
+  const int nC = int(in.seg.charts.size());
   const double h = in.h;
   // The order evidence of the a-charts (chart_order.h): groups of same-axis charts sharing a vertex
   // (one plane each), the Voronoi distance samples and the ordered pairs.
@@ -451,40 +464,44 @@ void solve_axis(int a, const AxisInputs& in, PolyCubeMap& out, PositionDeformSta
   if (axis_charts.empty())
     throw InvalidInput(in.input.source + ": the PolyCube structure has no chart on axis " +
                        std::string(1, char('X' + a)));
-  const AxisChartOrder order =
-      chart_order_evidence(in.Vd, in.graph, in.vcharts, in.chart_label, in.chart_neighbours, a, h);
-  st.merged_same_axis_charts += order.merged_same_axis_charts;
-  const std::vector<DistancePair> dpairs = distance_pairs(order, in);
+  AxisLevels lv;
+  lv.order = chart_order_evidence(in.Vd, in.graph, in.vcharts, in.chart_label, in.chart_neighbours, a, h);
+  st.merged_same_axis_charts += lv.order.merged_same_axis_charts;
+  const std::vector<DistancePair> dpairs = distance_pairs(lv.order, in);
   st.distance_pairs += int(dpairs.size());
-  st.ordered_pairs += int(order.ordered.size());
+  st.ordered_pairs += int(lv.order.ordered.size());
 
-  auto t0 = Clock::now();
-  const PoissonStep ps = poisson_step(in, order, dpairs, a);
+  const auto t0 = Clock::now();
+  lv.ps = poisson_step(in, lv.order, dpairs, a);
   st.seconds_poisson += seconds_since(t0);
 
-  const std::vector<long> k = chart_levels(order, ps, in, st);
-  for (int ch : axis_charts) out.chart_plane[ch] = int(k[order.chart_group[ch]]);
-  const std::vector<double> pin = feature_line_pins(a, in, order, ps, k, pinned, st);
+  lv.k = chart_levels(lv.order, lv.ps, in, st);
+  for (int ch : axis_charts) out.chart_plane[ch] = int(lv.k[lv.order.chart_group[ch]]);
+  lv.pin = feature_line_pins(a, in, lv.order, lv.ps, lv.k, pinned, st);
+  return lv;
+}
 
-  // Final solve with the chart planes pinned.
+/// Step 4 of axis a: the final solve with the chart planes pinned, into out.U.col(a).
+void axis_final(int a, const AxisInputs& in, const AxisLevels& lv, PolyCubeMap& out, PositionDeformStats& st) {
   throw_if_interrupted();
-  t0 = Clock::now();
-  const std::vector<int>& vgroup = order.vertex_group;
+  const auto t0 = Clock::now();
+  const int nV = int(in.input.V.rows());
+  const std::vector<int>& vgroup = lv.order.vertex_group;
   Eigen::VectorXd u(nV);
   for (int v = 0; v < nV; ++v)
-    if (vgroup[v] >= 0) u[v] = k[vgroup[v]] * h;
-  if (ps.nFree > 0) {
+    if (vgroup[v] >= 0) u[v] = lv.k[vgroup[v]] * in.h;
+  if (lv.ps.nFree > 0) {
     if (in.p.final_solve == FinalSolve::poisson)
-      final_poisson(ps, k, in, vgroup, pin, u);
+      final_poisson(lv.ps, lv.k, in, vgroup, lv.pin, u);
     else
-      final_mvc(ps, in, vgroup, pin, a, u, st);
+      final_mvc(lv.ps, in, vgroup, lv.pin, a, u, st);
   }
   out.U.col(a) = u;
   st.seconds_final += seconds_since(t0);
   // Planarity: exact by substitution; measured anyway.
   for (int v = 0; v < nV; ++v)
     if (vgroup[v] >= 0)
-      st.planarity_error = std::max(st.planarity_error, std::abs(out.U(v, a) - k[vgroup[v]] * h) / in.diag);
+      st.planarity_error = std::max(st.planarity_error, std::abs(out.U(v, a) - lv.k[vgroup[v]] * in.h) / in.diag);
 }
 
 /// The per-axis statistics merged into st, in axis order, by their declared rules.
@@ -583,7 +600,13 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
   report(0, "chart planes, Poisson and final solves");
   std::array<PositionDeformStats, 3> axis_stats{};
   std::array<std::vector<int>, 3> pinned;  // per axis: the feature lines' vertices pinned on it
-  oneapi::tbb::parallel_for(0, 3, [&](int a) { solve_axis(a, in, out, axis_stats[size_t(a)], pinned[size_t(a)]); });
+  std::array<AxisLevels, 3> levels;
+  parallel_two_phase(
+      3, [&](int a) { levels[size_t(a)] = axis_levels(a, in, out, axis_stats[size_t(a)], pinned[size_t(a)]); },
+      [&](int a) {
+        axis_final(a, in, levels[size_t(a)], out, axis_stats[size_t(a)]);
+        levels[size_t(a)] = AxisLevels{};  // its systems are no longer needed
+      });
   merge_axes(axis_stats, st);
   if (p.untangle_iterations > 0) {
     report(0.35, "untangling the map");
