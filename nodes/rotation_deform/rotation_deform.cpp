@@ -9,6 +9,7 @@
 #include <Eigen/SparseCore>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
@@ -561,14 +562,14 @@ RotationDeformResult rotation_deform(const TetMesh& input, const RotationDeformP
       std::plus<double>());
   res.assemble_seconds = seconds_since(t_assemble);
 
-  // Q and P share their pattern (P keeps explicit zeros in the pinned rows): one analysis.
+  // Q and P share their pattern (P keeps explicit zeros in the pinned rows): one analysis, then the two
+  // numeric factorizations side by side (each on its own CHOLMOD workspace; the same factors as one after
+  // the other).
   CholmodFactorization quat_solver;
   quat_solver.analyse(Q);
   CholmodFactorization pos_solver = quat_solver.share_analysis();
   throw_if_interrupted();
-  quat_solver.factor(Q);
-  throw_if_interrupted();
-  pos_solver.factor(P);
+  tbb::parallel_invoke([&] { quat_solver.factor(Q); }, [&] { pos_solver.factor(P); });
 
   res.boundary_vertices = static_cast<int>(top.bverts.size());
   res.boundary_faces = static_cast<int>(top.F.rows());
