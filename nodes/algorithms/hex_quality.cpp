@@ -62,49 +62,69 @@ struct Topology {
   long unused_vertices = 0, faces_shared_by_more_than_two = 0, nonmanifold_boundary_edges = 0;
 };
 
-struct FaceRef {
-  std::array<int, 4> key;  // sorted vertex indices
-  int id;                  // 6 * hex + face
-  bool operator<(const FaceRef& o) const { return key < o.key || (key == o.key && id < o.id); }
-};
-
 // Faces used by exactly one hex, in (hex, face) order; counts faces used more than twice; the hex and local
-// face of each.
+// face of each. A face is matched with its copies among the faces whose smallest vertex is the same (a
+// bucket per vertex, filled by a counting sort): linear, where sorting all 6 #H faces was the pad stage's
+// largest cost.
 RowMatrixX4iQ boundary_faces(const HexMesh& m, long* faces_over_two, std::vector<int>* hex_of_face = nullptr,
                              std::vector<int>* local_face = nullptr) {
   const Eigen::Index nh = m.H.rows();
-  std::vector<FaceRef> faces(size_t(nh) * 6);
+  const size_t nf = size_t(nh) * 6;
+  std::vector<std::array<int, 4>> key(nf);  // per face (6 hex + face) its sorted vertices
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, nh), [&](const tbb::blocked_range<Eigen::Index>& r) {
     for (Eigen::Index h = r.begin(); h < r.end(); ++h)
       for (int f = 0; f < 6; ++f) {
-        FaceRef& fr = faces[size_t(h) * 6 + f];
-        for (int k = 0; k < 4; ++k) fr.key[k] = m.H(h, kFaces[f][k]);
-        std::sort(fr.key.begin(), fr.key.end());
-        fr.id = int(h * 6 + f);
+        std::array<int, 4>& k = key[size_t(h) * 6 + size_t(f)];
+        for (int c = 0; c < 4; ++c) k[size_t(c)] = m.H(h, kFaces[f][c]);
+        std::sort(k.begin(), k.end());
       }
   });
-  tbb::parallel_sort(faces.begin(), faces.end());
-  std::vector<int> single;
-  long over_two = 0;
-  for (size_t i = 0; i < faces.size();) {
-    size_t j = i + 1;
-    while (j < faces.size() && faces[j].key == faces[i].key) ++j;
-    if (j - i == 1) single.push_back(faces[i].id);
-    if (j - i > 2) ++over_two;
-    i = j;
+  // the faces by smallest vertex (its offset from the lowest index: any index is counted, even one a
+  // malformed mesh holds outside its vertices), in id order within a bucket
+  int low = 0, high = -1;
+  for (const auto& k : key) low = std::min(low, k[0]), high = std::max(high, k[0]);
+  const size_t nb = size_t(std::int64_t(high) - low + 1);
+  std::vector<int> start(nb + 1, 0), bucket(nf);
+  for (const auto& k : key) ++start[size_t(k[0] - low) + 1];
+  for (size_t v = 0; v < nb; ++v) start[v + 1] += start[v];
+  {
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (size_t i = 0; i < nf; ++i) bucket[size_t(fill[size_t(key[i][0] - low)]++)] = int(i);
   }
-  std::sort(single.begin(), single.end());
-  RowMatrixX4iQ q(Eigen::Index(single.size()), 4);
-  for (size_t i = 0; i < single.size(); ++i)
-    for (int k = 0; k < 4; ++k) q(Eigen::Index(i), k) = m.H(single[i] / 6, kFaces[single[i] % 6][k]);
+  std::vector<char> single(nf, 0);
+  std::vector<char> first_of_many(nf, 0);  // the lowest id of a face used more than twice
+  tbb::parallel_for(size_t(0), nb, [&](size_t v) {
+    for (int a = start[v]; a < start[v + 1]; ++a) {
+      const int i = bucket[size_t(a)];
+      int copies = 0;
+      bool lowest = true;
+      for (int b = start[v]; b < start[v + 1]; ++b) {
+        const int j = bucket[size_t(b)];
+        if (key[size_t(j)] != key[size_t(i)]) continue;
+        ++copies;
+        lowest = lowest && j >= i;
+      }
+      single[size_t(i)] = copies == 1;
+      first_of_many[size_t(i)] = copies > 2 && lowest;
+    }
+  });
+  std::vector<int> singles;
+  long over_two = 0;
+  for (size_t i = 0; i < nf; ++i) {
+    if (single[i]) singles.push_back(int(i));
+    over_two += first_of_many[i];
+  }
+  RowMatrixX4iQ q(Eigen::Index(singles.size()), 4);
+  for (size_t i = 0; i < singles.size(); ++i)
+    for (int k = 0; k < 4; ++k) q(Eigen::Index(i), k) = m.H(singles[i] / 6, kFaces[singles[i] % 6][k]);
   if (faces_over_two) *faces_over_two = over_two;
   if (hex_of_face) {
-    hex_of_face->resize(single.size());
-    for (size_t i = 0; i < single.size(); ++i) (*hex_of_face)[i] = single[i] / 6;
+    hex_of_face->resize(singles.size());
+    for (size_t i = 0; i < singles.size(); ++i) (*hex_of_face)[i] = singles[i] / 6;
   }
   if (local_face) {
-    local_face->resize(single.size());
-    for (size_t i = 0; i < single.size(); ++i) (*local_face)[i] = single[i] % 6;
+    local_face->resize(singles.size());
+    for (size_t i = 0; i < singles.size(); ++i) (*local_face)[i] = singles[i] % 6;
   }
   return q;
 }

@@ -1,6 +1,7 @@
 #include "graph/node.h"
 #include "nodes/algorithms/hex_quality.h"
 #include "nodes/algorithms/triangle_tree.h"
+#include "nodes/artefacts/hex_topology.h"
 #include "nodes/quality/quality_json.h"
 #include "tests/helpers/hex_fixtures.h"
 
@@ -9,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <random>
 #include <set>
 
@@ -432,4 +434,44 @@ TEST_CASE("quality: timing on 100k hexes and a 50k-triangle surface", "[.][quali
                        << " surface triangles, 100000 samples per side: " << seconds << " s");
   CHECK(q.inverted == 0);
   CHECK(q.hausdorff_max < 0.05);
+}
+
+TEST_CASE("boundary quads: a grid with hexes removed and one hex doubled, against counting each face's copies",
+          "[quality]") {
+  const HexMesh g = grid_hex_mesh(7, 6, 5);
+  std::mt19937 rng(5);
+  HexMesh m = g;
+  std::vector<int> keep;
+  for (Eigen::Index h = 0; h < g.H.rows(); ++h)
+    if (rng() % 4 != 0) keep.push_back(int(h));
+  keep.push_back(keep[keep.size() / 2]);  // a hex twice: its faces used 2 or 3 times
+  m.H.resize(Eigen::Index(keep.size()), 8);
+  for (size_t i = 0; i < keep.size(); ++i) m.H.row(Eigen::Index(i)) = g.H.row(keep[i]);
+  // brute force: every face's sorted vertices, counted in a map
+  std::map<std::array<int, 4>, int> count;
+  auto key = [&](Eigen::Index h, int f) {
+    std::array<int, 4> k;
+    for (int c = 0; c < 4; ++c) k[size_t(c)] = m.H(h, hex_topology::kFaces[f][c]);
+    std::sort(k.begin(), k.end());
+    return k;
+  };
+  for (Eigen::Index h = 0; h < m.H.rows(); ++h)
+    for (int f = 0; f < 6; ++f) ++count[key(h, f)];
+  std::vector<int> hex_of, face_of;
+  const auto Q = hex_boundary_quads(m, &hex_of, &face_of);
+  std::vector<std::pair<int, int>> expected;
+  for (Eigen::Index h = 0; h < m.H.rows(); ++h)
+    for (int f = 0; f < 6; ++f)
+      if (count[key(h, f)] == 1) expected.emplace_back(int(h), f);
+  REQUIRE(size_t(Q.rows()) == expected.size());
+  for (size_t i = 0; i < expected.size(); ++i) {
+    CHECK(hex_of[i] == expected[i].first);
+    CHECK(face_of[i] == expected[i].second);
+    for (int c = 0; c < 4; ++c)
+      CHECK(Q(Eigen::Index(i), c) == m.H(expected[i].first, hex_topology::kFaces[expected[i].second][c]));
+  }
+  long over_two = 0;
+  for (const auto& [k, n] : count) over_two += n > 2;
+  CHECK(over_two > 0);
+  CHECK(hex_quality(m, nullptr).faces_shared_by_more_than_two == over_two);
 }
