@@ -50,15 +50,49 @@ inline double fast_cbrt(double x) {
   return y - (y * y * y - x) / (3.0 * y * y);
 }
 
-/// How winslow_term takes the cube root: the PolyCube map's untangling keeps std::cbrt (its output feeds
-/// every later stage, which a last-bit change would perturb); the hex optimizer takes fast_cbrt.
+/// x^(1/3) with the arithmetic of GNU libm's cbrt (glibc's sysdeps/ieee754/dbl-64/s_cbrt.c, the same since
+/// 1997): |x| = m 2^e with m in [0.5, 1); a degree-6 polynomial in m, one Halley step, times 2^((e mod 3)/3)
+/// and 2^(e div 3). The same operations in the same order give the same bits as std::cbrt on Debian's libm
+/// (tests/nodes/algorithms/test_cube_root.cpp compares them), without its calls to frexp and ldexp, which
+/// with the call itself were a tenth of the PolyCube map's untangling profile. Zero, subnormal and
+/// non-finite x go to std::cbrt.
+inline double libm_cbrt(double x) {
+  std::uint64_t bits;
+  std::memcpy(&bits, &x, sizeof bits);
+  const int biased = int(bits >> 52 & 0x7ff);
+  if (biased == 0 || biased == 0x7ff) return std::cbrt(x);
+  const int e = biased - 1022;  // |x| = m 2^e
+  const std::uint64_t mbits = (bits & 0x000fffffffffffffULL) | (std::uint64_t(1022) << 52);
+  double m;
+  std::memcpy(&m, &mbits, sizeof m);
+  constexpr double kCbrt2 = 1.2599210498948731648, kSqrCbrt2 = 1.5874010519681994748;
+  constexpr double kFactor[5] = {1.0 / kSqrCbrt2, 1.0 / kCbrt2, 1.0, kCbrt2, kSqrCbrt2};
+  const double u = (0.354895765043919860 +
+                    ((1.50819193781584896 +
+                      ((-2.11499494167371287 +
+                        ((2.44693122563534430 +
+                          ((-1.83469277483613086 + (0.784932344976639262 - 0.145263899385486377 * m) * m) * m)) *
+                         m)) *
+                       m)) *
+                     m));
+  const double t2 = u * u * u;
+  const double y = u * (t2 + 2.0 * m) / (2.0 * t2 + m) * kFactor[2 + e % 3];
+  // times 2^(e / 3) (|e / 3| <= 341: a normal power of two, and an exact product)
+  const std::uint64_t pbits = std::uint64_t(1023 + e / 3) << 52;
+  double p;
+  std::memcpy(&p, &pbits, sizeof p);
+  return (x > 0 ? y : -y) * p;
+}
+
+/// How winslow_term takes the cube root: the PolyCube map's untangling keeps libm's bits (libm_cbrt; its
+/// output feeds every later stage, which a last-bit change would perturb); the hex optimizer takes fast_cbrt.
 enum class CubeRoot { exact, fast };
 
 /// |J|_F² / (3 χ(det J, ε)^{2/3}) (1 for a rotation as ε -> 0) and, if dJ, its gradient with respect to J.
 inline double winslow_term(const Eigen::Matrix3d& J, double eps, Eigen::Matrix3d* dJ, CubeRoot root = CubeRoot::exact) {
   const double D = J.determinant();
   const double c = chi(D, eps);
-  const double c23 = root == CubeRoot::fast ? fast_cbrt(c * c) : std::cbrt(c * c);
+  const double c23 = root == CubeRoot::fast ? fast_cbrt(c * c) : libm_cbrt(c * c);
   const double n2 = J.squaredNorm();
   if (dJ) {
     Eigen::Matrix3d cof;  // d det / dJ

@@ -24,6 +24,7 @@ using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
 using Mat43 = Eigen::Matrix<double, 4, 3>;
 using VecX = Eigen::VectorXd;
+using optimize_detail::libm_cbrt;
 using optimize_detail::winslow_term;
 
 /// Tets whose input volume is below this fraction of the mean do not set ε (see min_det()).
@@ -188,7 +189,7 @@ class MapUntangler {
     for (size_t a = 0; a < active_.size(); ++a) {
       const double det = jacobian(a).determinant();
       if (!(det > 0)) continue;
-      const double c = weight_[a] * 2.0 / (3.0 * std::cbrt(det * det));
+      const double c = weight_[a] * 2.0 / (3.0 * libm_cbrt(det * det));
       const Mat3& R = rinv_[a];
       std::array<Vec3, 4> grad;
       grad[0] = -R.colwise().sum().transpose();
