@@ -522,6 +522,7 @@ void untangle(const TetMesh& input, const PolyCubeSegmentation& seg, const Posit
   MapUntangleParams up;
   up.max_iterations = p.untangle_iterations;
   up.rings = p.untangle_rings;
+  up.shrink = p.untangle_shrink;
   up.seconds = p.untangle_seconds;
   up.polish_everywhere = p.map_polish == MapPolish::everywhere;
   up.polish_iterations = p.map_polish_iterations;

@@ -71,6 +71,9 @@ struct PositionDeformParams {
   int untangle_iterations =
       600;                 ///< L-BFGS iterations of the map's untangling (untangle_map.h); 0 = keep the folds, [0, 1e6]
   int untangle_rings = 2;  ///< the untangling moves the inverted tets' vertices grown by this many rings, [0, 50]
+  bool untangle_shrink = false;  ///< rounds after the first move only the tets still inverted grown by untangle_rings
+                                 ///< rings (untangle_map.h MapUntangleParams::shrink): the untangling a third
+                                 ///< faster; off by default, the table's figures move both ways (docs/speed.md)
   double untangle_seconds =
       0;  ///< wall-time cap of the untangling (0 = none; a cap that is hit makes runs load-dependent), [0, 3600]
   MapPolish map_polish =

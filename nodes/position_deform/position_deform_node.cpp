@@ -35,6 +35,9 @@ const bool registered = register_node(
                  "L-BFGS iterations of the map's untangling (0 = keep the folds)", 0, 1000000)
             .add("untangle_rings", &P::untangle_rings,
                  "the untangling moves the inverted tets' vertices grown by this many rings", 0, 50)
+            .add("untangle_shrink", &P::untangle_shrink,
+                 "the untangling's rounds after the first move only the tets still inverted grown by untangle_rings "
+                 "rings")
             .add("untangle_seconds", &P::untangle_seconds, "wall-time cap of the untangling (0 = none)", 0.0, 3600.0)
             .add_enum("map_polish", &P::map_polish,
                       {{MapPolish::region, "region"}, {MapPolish::everywhere, "everywhere"}},

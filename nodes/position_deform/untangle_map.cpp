@@ -58,6 +58,8 @@ class MapUntangler {
       if (p_.polish_everywhere) polish(inv);
       return st_.inverted_after;
     }
+    first_region_.assign(size_t(U_.rows()), 0);
+    for (int v : free_) first_region_[size_t(v)] = 1;
 
     st_.inverted_after = count_inverted() + st_.flat;  // as the rounds count (tets with a free vertex)
     double mindet = min_det();
@@ -95,6 +97,14 @@ class MapUntangler {
       const double e = energy(VecX::Zero(ndof_), eps, nullptr);
       mindet = min_det();
       eps = optimize_detail::next_eps(eps, e, e_prev, mindet);
+      if (p_.shrink) {  // the next round works around the tets still inverted (ε from this round's region)
+        std::vector<char> now(inv);
+        tbb::parallel_for(Eigen::Index(0), nt, [&](Eigen::Index t) {
+          if (now[size_t(t)] < 2) now[size_t(t)] = volume6(t) <= 0 ? 1 : 0;
+        });
+        select(now);
+        if (free_.empty()) break;  // what is left has no vertex that may move
+      }
     }
     polish(inv);
     return st_.inverted_after;
@@ -123,8 +133,8 @@ class MapUntangler {
         build(region, skip);
         if (free_.empty()) return;
       } else if (st_.inverted_after > st_.flat) {
-        std::vector<char> region(size_t(U_.rows()), 0), skip(size_t(T_.rows()), 0);
-        for (int v : free_) region[size_t(v)] = 1;
+        std::vector<char> region = first_region_, skip(size_t(T_.rows()), 0);
+        if (p_.shrink) build(region, skip);  // the active tets of the first round's region
         for (int t : active_)
           if (volume6(t) <= cut) {
             skip[size_t(t)] = 1;
@@ -417,7 +427,8 @@ class MapUntangler {
   std::vector<Vec3> base_;
   std::vector<double> tet_energy_;
   std::vector<Mat43> tet_grad_;
-  std::vector<int> slot_;  ///< #V index in free_, -1 for a vertex that does not move
+  std::vector<int> slot_;           ///< #V index in free_, -1 for a vertex that does not move
+  std::vector<char> first_region_;  ///< #V: the first round's free vertices (the region polish's region)
 };
 
 }  // namespace

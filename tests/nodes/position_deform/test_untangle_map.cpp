@@ -220,3 +220,26 @@ TEST_CASE("polish_everywhere: a map without folds moves towards a conformal one,
     CHECK(plain.polish_factor_seconds == 0);
   }
 }
+
+TEST_CASE("shrink: rounds after the first, on the tets still inverted, untangle a deep fold as the whole region does",
+          "[position][untangle]") {
+  for (bool shrink : {false, true}) {
+    INFO("shrink " << shrink);
+    Grid g = grid(8);
+    RowMatrixX3d U = g.X;
+    // two folds: a vertex pushed through three cells, another through one
+    U.row(g.id(4, 4, 4)) += Eigen::RowVector3d(2.7, 1.9, -2.2);
+    U.row(g.id(2, 6, 2)) += Eigen::RowVector3d(-1.4, 0.3, 0.2);
+    const RowMatrixX3d U0 = U;
+    REQUIRE(inverted(U, g.T) > 0);
+    MapUntangleParams p;
+    p.shrink = shrink;
+    p.lbfgs_iterations = 2;  // short rounds: several are needed
+    MapUntangleStats st;
+    const long left = untangle_polycube_map(g.X, g.T, U, g.fixed, p, &st);
+    CHECK(st.rounds > 1);
+    CHECK(left == 0);
+    CHECK(inverted(U, g.T) == 0);
+    check_planes_kept(g, U0, U);
+  }
+}
