@@ -27,8 +27,6 @@
 namespace polyhex {
 
 class FastIncompleteLUT : public Eigen::IncompleteLUT<double, int> {
-  using Base = Eigen::IncompleteLUT<double, int>;
-
  public:
   FastIncompleteLUT() = default;
 
