@@ -16,6 +16,7 @@
 #include <Eigen/SVD>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <atomic>
@@ -1034,21 +1035,19 @@ HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback,
   const auto t0 = Clock::now();
   check_hex_mesh(mesh);
   struct Candidate {
-    const HexMesh* mesh;
+    const HexMesh* mesh = nullptr;
     OptimizeStats st;  // the Optimizer keeps a reference: candidates live in a deque
     std::unique_ptr<Optimizer> opt;
     double seconds = 0;  // its own time (its shape pass included if kept)
   };
   std::deque<Candidate> cands;
-  auto start = [&](const HexMesh& m, Optimizer::Creases creases) -> Candidate& {
+  auto prepare = [&](Candidate& c, const HexMesh& m, Optimizer::Creases creases) {
     const auto tc = Clock::now();
     check_hex_mesh(m);
-    Candidate& c = cands.emplace_back();
     c.mesh = &m;
     summarise(m, c.st.sj_min_before, c.st.sj_avg_before, c.st.inverted_before);
     c.opt = std::make_unique<Optimizer>(m, surface, p, creases, c.st);
     c.seconds = seconds_since(tc);
-    return c;
   };
   auto improve = [&](Candidate& c) {
     const auto tc = Clock::now();
@@ -1059,22 +1058,35 @@ HexMesh optimize_hexes_or_fallback(const HexMesh& mesh, const HexMesh* fallback,
   };
   const auto first = p.keep_creases ? Optimizer::Creases::at_vertices : Optimizer::Creases::none;
   report(0, "untangling, max-min");
-  improve(start(mesh, first));
+  prepare(cands.emplace_back(), mesh, first);
+  improve(cands[0]);
   const bool poor = cands[0].st.inverted_after > 0 || cands[0].st.sj_min_after < p.fallback_below_sj;
-  Candidate* creases = nullptr;
-  Candidate* fb = nullptr;
-  if (poor && p.feature_angle > 0 && p.move_boundary) {
-    report(0.2, "candidate with crease lines");
-    creases = &start(mesh, Optimizer::Creases::paths);
+  // The crease and fallback candidates are independent: they run side by side (each is deterministic on its
+  // own, and the choice below reads them in this order, so the result does not depend on the threads).
+  // Their slots are made first: a deque's elements stay where they are as it grows.
+  Candidate* creases = poor && p.feature_angle > 0 && p.move_boundary ? &cands.emplace_back() : nullptr;
+  Candidate* fb = poor && fallback ? &cands.emplace_back() : nullptr;
+  auto run_creases = [&] {
+    prepare(*creases, mesh, Optimizer::Creases::paths);
     if (creases->st.crease_lines_snapped > 0)
       improve(*creases);
     else
       creases->opt.reset();  // no crease line to follow: the same as the first
-  }
-  if (poor && fallback) {
-    report(0.27, "fallback candidate");
-    improve(*(fb = &start(*fallback, first)));
-  }
+  };
+  auto run_fallback = [&] {
+    prepare(*fb, *fallback, first);
+    improve(*fb);
+  };
+  if (creases || fb)
+    report(0.2, creases && fb ? "candidates with crease lines, fallback"
+                : creases     ? "candidate with crease lines"
+                              : "fallback candidate");
+  if (creases && fb)
+    tbb::parallel_invoke(run_creases, run_fallback);
+  else if (creases)
+    run_creases();
+  else if (fb)
+    run_fallback();
   Candidate* best = &cands[0];
   for (Candidate& c : cands)
     if (c.opt && better_result(c.st, best->st)) best = &c;

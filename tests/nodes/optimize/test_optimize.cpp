@@ -6,6 +6,7 @@
 #include "tests/helpers/voxel_maps.h"
 
 #include <catch2/catch.hpp>
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <random>
@@ -349,6 +350,48 @@ TEST_CASE("the fallback mesh is optimized only when hexes stay inverted, and kep
   a.inverted_after = 0;
   CHECK(better_result(a, b));
   CHECK(better_result(a, b));
+}
+
+TEST_CASE("the crease and fallback candidates run side by side: the same choice and mesh on 1 or 2 threads",
+          "[optimize]") {
+  const SurfaceMesh box = test::voxel_surface(test::voxel_box(3, 3, 3));
+  const HexMesh clean = test::grid_hex_mesh(3, 3, 3);
+  HexMesh poor = clean;  // an edge vertex slid up its face: on the surface, its hexes sheared
+  poor.V.row(1) << 1, 0, 0.7;
+  HexMesh fallback = clean;  // an interior vertex off its place
+  fallback.V.row((1 * 4 + 1) * 4 + 1) += Eigen::RowVector3d(0.3, -0.2, 0.25);
+  // frozen: the crease candidate snaps the boundary onto the box's edges (the clean grid, SJ 1) and the
+  // fallback stays as it is; both run, and the crease candidate, first in order, is kept
+  OptimizeParams frozen = no_phases();
+  frozen.fallback_below_sj = 0.8;
+  OptimizeStats st;
+  FallbackOutcome fb;
+  HexMesh out = optimize_hexes_or_fallback(poor, &fallback, box, frozen, &st, &fb);
+  CHECK(fb.ran);
+  CHECK(fb.creases_ran);
+  CHECK(fb.creases_kept);
+  CHECK_FALSE(fb.kept);
+  CHECK(fb.stats.sj_min_after < 1.0);
+  CHECK((out.V - clean.V).norm() < 1e-12);
+  // every phase, the first result held poor: all three candidates do their work, on 2 threads and on 1
+  OptimizeParams all;
+  all.fallback_below_sj = 1.0;
+  OptimizeStats st2, st1;
+  FallbackOutcome fb2, fb1;
+  const HexMesh two = optimize_hexes_or_fallback(poor, &fallback, box, all, &st2, &fb2);
+  HexMesh one;
+  {
+    tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+    one = optimize_hexes_or_fallback(poor, &fallback, box, all, &st1, &fb1);
+  }
+  CHECK(fb2.ran);
+  CHECK(fb2.creases_ran);
+  CHECK(one.V == two.V);  // bit for bit
+  CHECK(fb1.kept == fb2.kept);
+  CHECK(fb1.creases_kept == fb2.creases_kept);
+  CHECK(fb1.stats.sj_min_after == fb2.stats.sj_min_after);
+  CHECK(fb1.creases_stats.sj_min_after == fb2.creases_stats.sj_min_after);
+  CHECK(st1.sj_min_after == st2.sj_min_after);
 }
 
 TEST_CASE("the shape sweeps raise the average and stop once a pair of them gains less than shape_tolerance",
