@@ -263,6 +263,42 @@ void remove_small_charts(const Surface& s, const std::vector<Vec3>& normal, cons
   }
 }
 
+/// Last resort (beyond §5.1), on a structure still invalid after every repair: the small charts (area below
+/// p.small_chart_area of the surface) that the problems name, smallest first, each removed alone by flood fill
+/// from its neighbours and the corners repaired after it; the first that lowers the structure's score is kept,
+/// and the search starts again. A chart of the opposite direction beside another, or a patch that makes a
+/// 4-valent corner, is often a few hex faces the earlier steps left: the ones whose removal does not help are
+/// left as they were.
+void remove_failing_charts(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p, double h,
+                           State& st) {
+  for (int round = 0; round < p.max_splits; ++round) {
+    throw_if_interrupted();
+    const PolyCubeSegmentation r = make_result(s, st);
+    if (r.valid) return;
+    std::vector<int> order;
+    for (int c : r.failing_charts)
+      if (r.charts[size_t(c)].area < p.small_chart_area * s.total_area) order.push_back(c);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](int a, int b) { return r.charts[size_t(a)].area < r.charts[size_t(b)].area; });
+    const auto before = structure_score(s, st);
+    bool applied = false;
+    for (int c : order) {
+      State trial = st;
+      for (int t = 0; t < s.nf(); ++t)
+        if (r.chart[t] == c) trial.label[size_t(t)] = -1;
+      flood_fill(s, normal, trial.label);
+      if (p.repair_corners) repair_corners(s, normal, h, p.max_splits, trial);
+      if (structure_score(s, trial) < before) {
+        st = std::move(trial);
+        ++st.removed_small;
+        applied = true;
+        break;
+      }
+    }
+    if (!applied) return;
+  }
+}
+
 }  // namespace
 
 void clean_up(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSegmentParams& p, State& st) {
@@ -311,6 +347,7 @@ void repair(const Surface& s, const std::vector<Vec3>& normal, const PolyCubeSeg
     if (p.repair_corners) repair_corners(s, normal, h, p.max_splits, trial);
     if (structure_score(s, trial) < structure_score(s, st)) st = std::move(trial);
   }
+  if (p.final_cleanup) remove_failing_charts(s, normal, p, h, st);
 }
 
 namespace {

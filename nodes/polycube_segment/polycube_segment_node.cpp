@@ -89,7 +89,7 @@ const bool registered = register_node(
           }
           return make_artefact(std::make_shared<const PolyCubeSegmentation>(std::move(s)));
         })
-        .with_version("14"));
+        .with_version("15"));
 
 }  // namespace
 }  // namespace polyhex
