@@ -228,6 +228,7 @@ struct PoissonStep {
   int nFree = 0;         ///< free vertices (the first unknowns)
   Eigen::SparseMatrix<double> A;
   Eigen::VectorXd rhs, y;  ///< the system's right-hand side and solution
+  bool iterative = false;  ///< solved by conjugate gradients (poisson_direct_max)
 };
 
 PoissonStep poisson_step(const AxisInputs& in, const AxisChartOrder& order, const std::vector<DistancePair>& dpairs,
@@ -267,6 +268,33 @@ PoissonStep poisson_step(const AxisInputs& in, const AxisChartOrder& order, cons
   ps.A.resize(n, n);
   ps.A.setFromTriplets(trip.begin(), trip.end());
   throw_if_interrupted();
+  if (n > in.p.poisson_direct_max) {
+    // Conjugate gradients on the lower triangle, preconditioned by an incomplete Cholesky factor. The eps pull
+    // is the only thing that fixes the translation (eigenvalue ~eps), which the tolerance does not resolve:
+    // summing the rows of A y = rhs gives it exactly (the edge and distance terms sum to zero), Σ w y = Σ w t
+    // over the pulls' weights w and targets t, so the solution is shifted to satisfy it.
+    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::IncompleteCholesky<double, Eigen::Lower>>
+        cg;
+    cg.setTolerance(1e-11);
+    cg.setMaxIterations(20000);
+    cg.compute(ps.A);
+    if (cg.info() == Eigen::Success) {
+      ps.y = cg.solve(rhs);
+      if (cg.info() == Eigen::Success && ps.y.allFinite()) {
+        double wsum = 0, wt = 0, wy = 0;
+        for (int v = 0; v < nV; ++v)
+          if (vgroup[v] < 0) wsum += eps, wt += eps * Vd(v, a), wy += eps * ps.y[var[v]];
+        for (int g = 0; g < nG; ++g) {
+          const double w = eps * order.group_size[g];
+          wsum += w, wt += w * order.group_mean[g], wy += w * ps.y[nFree + g];
+        }
+        ps.y.array() += (wt - wy) / wsum;
+        ps.iterative = true;
+        return ps;
+      }
+    }
+    // not converged: the factorization below
+  }
   CholmodFactorization chol(ps.A);
   ps.y = chol.solve(rhs);
   return ps;
@@ -473,6 +501,7 @@ AxisLevels axis_levels(int a, const AxisInputs& in, PolyCubeMap& out, PositionDe
 
   const auto t0 = Clock::now();
   lv.ps = poisson_step(in, lv.order, dpairs, a);
+  st.poisson_cg_axes += lv.ps.iterative ? 1 : 0;
   st.seconds_poisson += seconds_since(t0);
 
   lv.k = chart_levels(lv.order, lv.ps, in, st);

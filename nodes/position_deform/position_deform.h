@@ -65,6 +65,9 @@ struct PositionDeformParams {
   FinalSolve final_solve = FinalSolve::mvc_laplace;  ///< mvc_laplace (§5.2) or poisson
   LevelPlacement level_placement =
       LevelPlacement::balanced;     ///< chart levels: balanced (chart_order.h place_levels) or push_up
+  int poisson_direct_max = 150000;  ///< the Poisson step's system is factored (CHOLMOD) up to this many unknowns and
+                                    ///< solved by conjugate gradients (incomplete Cholesky) above: a factorization's
+                                    ///< cost grows as n^2 on a 3D mesh (docs/speed.md, size scaling), [0, 2e9]
   int final_jacobi_iterations = 0;  ///< mvc_laplace: BiCGSTAB iterations with the diagonal preconditioner before the
                                     ///< incomplete LU takes over (0 = incomplete LU at once), [0, 1e6]. Faster, but off
                                     ///< by default: the meshes change (docs/position_deform.md)
@@ -108,6 +111,7 @@ struct PositionDeformStats {
   int feature_lines_pinned = 0;  ///< ... pinned at a level (not on the level of a chart beside theirs)
   int final_iterations = 0;      ///< BiCGSTAB iterations of the mvc_laplace final solves (three axes)
   int final_ilu_axes = 0;        ///< axes whose final solve used the incomplete LU preconditioner
+  int poisson_cg_axes = 0;       ///< axes whose Poisson step was solved by conjugate gradients (poisson_direct_max)
   double seconds_poisson = 0, seconds_final = 0;  ///< summed over the three axes (which run in parallel)
 
   /// Report names, and how the three axes' figures merge (runtime/stat_fields.h).
@@ -127,6 +131,7 @@ struct PositionDeformStats {
         stat("feature_lines_pinned", &S::feature_lines_pinned, Combine::sum),
         stat("final_iterations", &S::final_iterations, Combine::sum),
         stat("final_ilu_axes", &S::final_ilu_axes, Combine::sum),
+        stat("poisson_cg_axes", &S::poisson_cg_axes, Combine::sum),
         stat("seconds_poisson", &S::seconds_poisson, Combine::sum),
         stat("seconds_final", &S::seconds_final, Combine::sum));
   }

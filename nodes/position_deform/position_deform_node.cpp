@@ -27,6 +27,9 @@ const bool registered = register_node(
                       {{LevelPlacement::balanced, "balanced"}, {LevelPlacement::push_up, "push_up"}},
                       "chart levels keeping the orders apart: weighted least-squares placement, or the push of each "
                       "chart above those below it")
+            .add("poisson_direct_max", &P::poisson_direct_max,
+                 "the Poisson step is factored up to this many unknowns, solved by conjugate gradients above", 0,
+                 2000000000)
             .add("final_jacobi_iterations", &P::final_jacobi_iterations,
                  "mvc_laplace: BiCGSTAB iterations with the diagonal preconditioner before the incomplete LU (0 = ILU "
                  "at once, the default: see position_deform.h)",
@@ -68,7 +71,7 @@ const bool registered = register_node(
                      " same-axis charts share a vertex and were put on one plane");
           return make_artefact(std::move(m));
         })
-        .with_version("12"));
+        .with_version("13"));
 
 // --save-all writes the PolyCube map as the tet mesh at its PolyCube positions (<id>.polycube.vtk) and
 // the PolyCube surface with chart ids and labels as cell data (<id>.polycube_surface.vtk).

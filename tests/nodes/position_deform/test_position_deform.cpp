@@ -272,6 +272,28 @@ TEST_CASE("the mean value Laplace solve: diagonal preconditioner, incomplete LU 
   check_planes(jac);
 }
 
+TEST_CASE("the Poisson step above poisson_direct_max: conjugate gradients give the factorization's planes and map",
+          "[position]") {
+  // Both solve one system, the iterative one to a relative residual of 1e-11 with its translation (the eps
+  // pull's eigenvalue) set exactly: the chart planes are the same integers, and the maps (the final solve
+  // started from either) agree to far below the hex edge.
+  PositionDeformParams p;
+  p.edge_length = 0.05;
+  p.untangle_iterations = 0;  // compare the solves themselves
+  p.map_polish = MapPolish::region;
+  SurfaceMesh l = test::voxel_surface({{0, 0, 0}, {1, 0, 0}, {0, 0, 1}}, 0.5);
+  Run direct = run_pipeline(l, 0.05, p);
+  CHECK(direct.stats.poisson_cg_axes == 0);  // the default: factored at this size
+  PositionDeformParams q = p;
+  q.poisson_direct_max = 0;
+  Run cg = run_pipeline(l, 0.05, q);
+  CHECK(cg.stats.poisson_cg_axes == 3);
+  CHECK(cg.map.chart_plane == direct.map.chart_plane);
+  REQUIRE(cg.map.U.rows() == direct.map.U.rows());
+  CHECK((cg.map.U - direct.map.U).cwiseAbs().maxCoeff() < 1e-8 * direct.map.edge_length);
+  check_planes(cg);
+}
+
 TEST_CASE("position_deform reports its phases in order through the progress callback", "[position][progress]") {
   Run r = run_pipeline(test::voxel_surface(test::voxel_box(3, 2, 2)), 0.2, PositionDeformParams{}, false);
   std::vector<std::pair<double, std::string>> calls;
