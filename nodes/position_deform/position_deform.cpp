@@ -270,7 +270,7 @@ PoissonStep poisson_step(const AxisInputs& in, const AxisChartOrder& order, cons
   throw_if_interrupted();
   if (n > in.p.poisson_direct_max) {
     // Conjugate gradients on the lower triangle, preconditioned by an incomplete Cholesky factor. The eps pull
-    // is the only thing that fixes the translation (eigenvalue ~eps), which the tolerance does not resolve:
+    // is the only thing that fixes the translation (eigenvalue ~eps), which a relative tolerance need not resolve:
     // summing the rows of A y = rhs gives it exactly (the edge and distance terms sum to zero), Σ w y = Σ w t
     // over the pulls' weights w and targets t, so the solution is shifted to satisfy it.
     Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::IncompleteCholesky<double, Eigen::Lower>>
