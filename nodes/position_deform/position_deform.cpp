@@ -258,13 +258,14 @@ PoissonStep poisson_step(const AxisInputs& in, const AxisChartOrder& order, cons
   for (auto& [i, j] : in.graph.edges)
     if (var[i] != var[j]) add_term(var[i], var[j], 1.0, Vd(j, a) - Vd(i, a));
   for (auto& d : dpairs) add_term(nFree + d.p, nFree + d.q, d.w, d.delta);
-  // Tiny pull towards the deformed coordinates removes the translation null space.
+  // Tiny pull towards the deformed coordinates removes the translation null space: per unknown its weight
+  // (eps, times the group's size for a chart group) and target (the deformed coordinate, the group's mean).
   const double eps = 1e-8;
+  Eigen::VectorXd pull_w(n), pull_t(n);
   for (int v = 0; v < nV; ++v)
-    if (vgroup[v] < 0) trip.emplace_back(var[v], var[v], eps), rhs[var[v]] += eps * Vd(v, a);
-  for (int g = 0; g < nG; ++g)
-    trip.emplace_back(nFree + g, nFree + g, eps * order.group_size[g]),
-        rhs[nFree + g] += eps * order.group_size[g] * order.group_mean[g];
+    if (vgroup[v] < 0) pull_w[var[v]] = eps, pull_t[var[v]] = Vd(v, a);
+  for (int g = 0; g < nG; ++g) pull_w[nFree + g] = eps * order.group_size[g], pull_t[nFree + g] = order.group_mean[g];
+  for (int i = 0; i < n; ++i) trip.emplace_back(i, i, pull_w[i]), rhs[i] += pull_w[i] * pull_t[i];
   ps.A.resize(n, n);
   ps.A.setFromTriplets(trip.begin(), trip.end());
   throw_if_interrupted();
@@ -282,12 +283,7 @@ PoissonStep poisson_step(const AxisInputs& in, const AxisChartOrder& order, cons
       ps.y = cg.solve(rhs);
       if (cg.info() == Eigen::Success && ps.y.allFinite()) {
         double wsum = 0, wt = 0, wy = 0;
-        for (int v = 0; v < nV; ++v)
-          if (vgroup[v] < 0) wsum += eps, wt += eps * Vd(v, a), wy += eps * ps.y[var[v]];
-        for (int g = 0; g < nG; ++g) {
-          const double w = eps * order.group_size[g];
-          wsum += w, wt += w * order.group_mean[g], wy += w * ps.y[nFree + g];
-        }
+        for (int i = 0; i < n; ++i) wsum += pull_w[i], wt += pull_w[i] * pull_t[i], wy += pull_w[i] * ps.y[i];
         ps.y.array() += (wt - wy) / wsum;
         ps.iterative = true;
         return ps;
