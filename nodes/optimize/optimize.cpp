@@ -67,6 +67,8 @@ const double kPaddedSharpCos = std::cos(75.0 * M_PI / 180.0);
 constexpr double kOnCrease = 0.05;
 /// Rounds of return_released: a vertex halted half way may go on once its neighbours have followed.
 constexpr int kReturnRounds = 10;
+/// Max-min passes over a released vertex's neighbours when it goes back with them (return_with_neighbours).
+constexpr int kReturnSweeps = 8;
 
 class Optimizer {
  public:
@@ -255,9 +257,92 @@ class Optimizer {
       }
       if (!any) break;
     }
+    if (p_.return_rings > 0)
+      for (size_t v = 0; v < released_.size() && !out_of_time(); ++v)
+        if (released_[v] && return_with_neighbours(int(v), floor)) moved = true;
     for (size_t v = 0; v < released_.size(); ++v)
       if (released_[v]) cap_[v] = tree_.distance(V_.row(Eigen::Index(v)).transpose());
     return moved;
+  }
+
+  /// A released vertex its hexes hold off the surface: alone it cannot go back without lowering the minimum
+  /// or inverting a hex, but its neighbours, fixed while it tries, were placed around its released position.
+  /// It goes back the whole way (then half of it), and the movable vertices within p_.return_rings rings of
+  /// hexes around it (but other released ones) take max-min steps (kReturnSweeps passes, in index order); the
+  /// result is kept if no hex
+  /// around the moved vertices is inverted that was not and their minimum scaled Jacobian stays at least
+  /// `floor` (the mesh's minimum when the return began), else every vertex goes back to where it was.
+  /// Sequential, in index order: the same result for any thread count.
+  bool return_with_neighbours(int v, double floor) {
+    // the rings, then the hexes whose measures the moves can change
+    std::vector<int> ring{v};
+    std::vector<char> in(size_t(V_.rows()), 0);
+    in[size_t(v)] = 1;
+    for (int r = 0, first = 0; r < p_.return_rings; ++r) {
+      const int last = int(ring.size());
+      for (int i = first; i < last; ++i)
+        for (int k = start_[size_t(ring[size_t(i)])]; k < start_[size_t(ring[size_t(i)]) + 1]; ++k)
+          for (int c = 0; c < 8; ++c) {
+            const int w = H_(inc_[size_t(k)], c);
+            if (!in[size_t(w)]) in[size_t(w)] = 1, ring.push_back(w);
+          }
+      first = last;
+    }
+    const std::vector<int> hexes = hexes_around(ring.data(), ring.size());
+    int inverted0 = 0;
+    min_sj(hexes, inverted0);
+    // the other released vertices stay: a max-min step would take them farther from the surface
+    std::vector<int> sweep_set;
+    for (size_t i = 1; i < ring.size(); ++i)
+      if (!released_[size_t(ring[i])]) sweep_set.push_back(ring[i]);
+    std::sort(sweep_set.begin(), sweep_set.end());
+    std::vector<Vec3> saved(ring.size());
+    for (size_t i = 0; i < ring.size(); ++i) saved[i] = V_.row(ring[i]).transpose();
+    const Vec3 x0 = saved[0];
+    released_[size_t(v)] = 0;  // project() as for a vertex on the surface
+    const Vec3 target = project(v, x0);
+    for (const double t : {1.0, 0.5}) {
+      released_[size_t(v)] = t == 1.0 ? 0 : 1;  // on the surface, it slides on it with the others
+      V_.row(v) = (x0 + t * (target - x0)).transpose();
+      for (int pass = 0; pass < kReturnSweeps; ++pass) {
+        bool any = false;
+        if (t == 1.0 && movable(v)) any = maxmin_step(v) || any;
+        for (int w : sweep_set)
+          if (movable(w)) any = maxmin_step(w) || any;
+        if (!any) break;
+      }
+      int inverted = 0;
+      const double m = min_sj(hexes, inverted);
+      if (inverted <= inverted0 && m >= floor) {
+        if (t == 1.0) ++st_.returned_vertices, ++st_.returned_with_neighbours;
+        return true;
+      }
+      for (size_t i = 0; i < ring.size(); ++i) V_.row(ring[i]) = saved[i].transpose();
+    }
+    released_[size_t(v)] = 1;
+    return false;
+  }
+
+  /// The hexes around the n vertices vs, sorted, each once.
+  std::vector<int> hexes_around(const int* vs, size_t n) const {
+    std::vector<int> hexes;
+    for (size_t j = 0; j < n; ++j)
+      for (int i = start_[size_t(vs[j])]; i < start_[size_t(vs[j]) + 1]; ++i) hexes.push_back(inc_[size_t(i)]);
+    std::sort(hexes.begin(), hexes.end());
+    hexes.erase(std::unique(hexes.begin(), hexes.end()), hexes.end());
+    return hexes;
+  }
+
+  /// The minimum scaled Jacobian of the given hexes; `inverted` gets how many have a corner at or below 0.
+  double min_sj(const std::vector<int>& hexes, int& inverted) const {
+    double m = 1;
+    inverted = 0;
+    for (int h : hexes) {
+      const HexSJ x = hex_scaled_jacobian(points(h));
+      m = std::min(m, x.sj);
+      inverted += x.corner_min <= 0;
+    }
+    return m;
   }
 
   double sj_min() const {
@@ -715,25 +800,29 @@ class Optimizer {
       prev = std::max(prev, gmin);
       ++st_.maxmin_sweeps;
       ++st_.iterations;
-      const long moved = sweep(sel, [&](int v) {
-        Terms base;
-        const Local l0 = local(v, &base);
-        // candidate: the average of the edge neighbours (interior vertices)
-        Vec3 avg = Vec3::Zero();
-        for (int w : nbr_[size_t(v)]) avg += V_.row(w).transpose();
-        avg /= double(std::max<size_t>(nbr_[size_t(v)].size(), 1));
-        // descend() judges a trial position right after evaluating the objective there: `ok` reads the
-        // local measures of that same evaluation
-        Local last{};
-        auto ok = [&] { return last.inverted <= l0.inverted && last.sj_min > l0.sj_min + 1e-9; };
-        return descend(
-            v, [&] { return soft_min(v, last, base); }, ok, 0.2, boundary_[size_t(v)] ? nullptr : &avg);
-      });
+      const long moved = sweep(sel, [&](int v) { return maxmin_step(v); });
       if (moved == 0) {
         if (worst_only) break;
         worst_only = true, stall = 0;
       }
     }
+  }
+
+  /// One max-min step of vertex v: a descent on the soft minimum of its hexes' scaled Jacobians, kept only if
+  /// their minimum rises and none inverts; interior vertices also try the average of their edge neighbours.
+  bool maxmin_step(int v) {
+    Terms base;
+    const Local l0 = local(v, &base);
+    // candidate: the average of the edge neighbours (interior vertices)
+    Vec3 avg = Vec3::Zero();
+    for (int w : nbr_[size_t(v)]) avg += V_.row(w).transpose();
+    avg /= double(std::max<size_t>(nbr_[size_t(v)].size(), 1));
+    // descend() judges a trial position right after evaluating the objective there: `ok` reads the
+    // local measures of that same evaluation
+    Local last{};
+    auto ok = [&] { return last.inverted <= l0.inverted && last.sj_min > l0.sj_min + 1e-9; };
+    return descend(
+        v, [&] { return soft_min(v, last, base); }, ok, 0.2, boundary_[size_t(v)] ? nullptr : &avg);
   }
 
   // (b') element moves: the vertices of one poor hex move together towards the cube that best fits it
@@ -754,29 +843,12 @@ class Optimizer {
                                             Vec3(-.5, .5, -.5),  Vec3(-.5, -.5, .5), Vec3(.5, -.5, .5),
                                             Vec3(.5, .5, .5),    Vec3(-.5, .5, .5)};
     long moved = 0;
-    std::vector<int> region;
     for (const auto& [s0, h] : poor) {
       throw_if_interrupted();
       if (out_of_time()) break;
-      region.clear();
-      for (int k = 0; k < 8; ++k) {
-        const int v = H_(h, k);
-        for (int i = start_[size_t(v)]; i < start_[size_t(v) + 1]; ++i) region.push_back(inc_[size_t(i)]);
-      }
-      std::sort(region.begin(), region.end());
-      region.erase(std::unique(region.begin(), region.end()), region.end());
-      auto region_quality = [&](int& inverted) {
-        double m = 1;
-        inverted = 0;
-        for (int r : region) {
-          const HexSJ x = hex_scaled_jacobian(points(r));
-          m = std::min(m, x.sj);
-          inverted += x.corner_min <= 0;
-        }
-        return m;
-      };
+      const std::vector<int> region = hexes_around(H_.row(h).data(), 8);
       int inv0 = 0;
-      const double m0 = region_quality(inv0);
+      const double m0 = min_sj(region, inv0);
       const std::array<Vec3, 8> P = points(h);
       Vec3 t = Vec3::Zero();
       for (const auto& x : P) t += x;
@@ -796,7 +868,7 @@ class Optimizer {
           V_.row(v) = project(v, P[size_t(k)] + lambda * (c - P[size_t(k)])).transpose();
         }
         int inv1 = 0;
-        const double m1 = region_quality(inv1);
+        const double m1 = min_sj(region, inv1);
         if (inv1 <= inv0 && m1 > m0 + 1e-6) {
           ++moved;
           break;

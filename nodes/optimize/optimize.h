@@ -51,6 +51,8 @@ struct OptimizeParams {
   bool release_boundary =
       true;  ///< last resort: boundary corners of hexes still inverted after untangling may leave the surface;
              ///< once untangled they go back as far as their hexes allow without lowering the minimum
+  int return_rings = 2;  ///< a released vertex that cannot go back alone goes back with its neighbours within this
+                         ///< many rings of hexes re-placed around it (max-min steps), 0 = alone, [0, 10]
   double feature_angle =
       kFeatureAngle;  ///< degrees: an edge of the surface sharper than this is a crease (features.h), 0 = no
                       ///< crease handling; if the first result is poor (fallback_below_sj), a second candidate puts
@@ -85,11 +87,12 @@ struct OptimizeStats {
   int colours = 0;
   double boundary_distance_max = 0;  ///< max distance of a boundary vertex from the surface / bbox diagonal
   bool time_budget_hit = false;
-  long released_vertices = 0;    ///< boundary vertices released from the surface to untangle (release_boundary)
-  long returned_vertices = 0;    ///< ... of them, those that went back onto it once untangled
-  int crease_lines = 0;          ///< crease lines of the surface at feature_angle (at least 1.5 hex edges long)
-  int crease_lines_snapped = 0;  ///< ... with boundary vertices kept on them
-  long crease_vertices = 0;      ///< boundary vertices kept on a crease line or at a crease corner
+  long released_vertices = 0;         ///< boundary vertices released from the surface to untangle (release_boundary)
+  long returned_vertices = 0;         ///< ... of them, those that went back onto it once untangled
+  long returned_with_neighbours = 0;  ///< ... of those, the ones whose neighbours moved with them (return_rings)
+  int crease_lines = 0;               ///< crease lines of the surface at feature_angle (at least 1.5 hex edges long)
+  int crease_lines_snapped = 0;       ///< ... with boundary vertices kept on them
+  long crease_vertices = 0;           ///< boundary vertices kept on a crease line or at a crease corner
   double seconds = 0;
   double untangle_seconds = 0, global_seconds = 0, maxmin_seconds = 0, element_seconds = 0, smooth_seconds = 0,
          shape_seconds = 0;  ///< per phase
@@ -112,7 +115,8 @@ struct OptimizeStats {
         stat("smooth_rounds", &S::smooth_rounds), stat("smooth_kept", &S::smooth_kept),
         stat("iterations", &S::iterations), stat("moves", &S::moves), stat("colours", &S::colours),
         stat("boundary_distance_max", &S::boundary_distance_max), stat("released_vertices", &S::released_vertices),
-        stat("returned_vertices", &S::returned_vertices), stat("time_budget_hit", &S::time_budget_hit),
+        stat("returned_vertices", &S::returned_vertices),
+        stat("returned_with_neighbours", &S::returned_with_neighbours), stat("time_budget_hit", &S::time_budget_hit),
         stat("seconds", &S::seconds), stat("phase_seconds.untangle", &S::untangle_seconds),
         stat("phase_seconds.global", &S::global_seconds), stat("phase_seconds.maxmin", &S::maxmin_seconds),
         stat("phase_seconds.element", &S::element_seconds), stat("phase_seconds.smooth", &S::smooth_seconds),

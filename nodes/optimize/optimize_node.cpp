@@ -54,6 +54,10 @@ const bool registered = register_node(
             .add("release_boundary", &P::release_boundary,
                  "last resort: boundary corners of hexes still inverted after untangling may leave the surface "
                  "(once untangled they go back as far as their hexes allow without lowering the minimum)")
+            .add("return_rings", &P::return_rings,
+                 "a released vertex that cannot go back alone goes back with its neighbours within this many rings "
+                 "of hexes re-placed around it (0 = alone)",
+                 0, 10)
             .add("feature_angle", &P::feature_angle,
                  "an edge of the surface sharper than this many degrees is a crease (0 = no crease handling); when "
                  "the first result is poor (see fallback_below_sj), the mesh is optimized again with paths of "
@@ -104,7 +108,7 @@ const bool registered = register_node(
             ctx.warn("optimization stopped at its time budget of " + std::to_string(p.time_budget) + " s");
           return make_artefact(std::move(out));
         })
-        .with_version("30"));
+        .with_version("31"));
 
 }  // namespace
 }  // namespace polyhex

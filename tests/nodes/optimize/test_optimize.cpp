@@ -474,3 +474,40 @@ TEST_CASE("optimize reports its phases in order through the progress callback", 
   CHECK(calls[1].first > calls[0].first);
   CHECK(calls[1].first < 1);
 }
+
+TEST_CASE("a released vertex its hexes hold off the surface goes back with its neighbours re-placed around it",
+          "[optimize]") {
+  // Two vertices of a 4^3 grid pushed through the bottom face, one untangling sweep on the surface, no later
+  // phase: the release untangles the hexes off the surface and the neighbours stay where that put them.
+  // Alone (return_rings 0) one released vertex cannot go back without lowering the minimum; with the
+  // vertices within two rings taking max-min steps around it, it goes back, and the minimum does not fall.
+  const SurfaceMesh s = test::voxel_surface(test::voxel_box(4, 4, 4));
+  HexMesh g = test::grid_hex_mesh(4, 4, 4);
+  auto id = [](int i, int j, int k) { return (k * 5 + j) * 5 + i; };
+  g.V.row(id(2, 2, 1)) << 2.2, 2.1, -0.6;
+  g.V.row(id(2, 1, 1)) << 2.0, 1.2, -0.3;
+  OptimizeParams p = no_phases();
+  p.untangle_iterations = 1;
+  p.return_rings = 0;
+  OptimizeStats alone;
+  const HexMesh a = optimize_hexes(g, s, p, &alone);
+  REQUIRE(alone.released_vertices > 0);
+  CHECK(alone.returned_vertices < alone.released_vertices);
+  CHECK(boundary_distance(a, s) > 1e-3);
+  p.return_rings = 2;
+  OptimizeStats st;
+  const HexMesh b = optimize_hexes(g, s, p, &st);
+  CHECK(st.inverted_after == 0);
+  CHECK(st.released_vertices == alone.released_vertices);
+  CHECK(st.returned_vertices == st.released_vertices);
+  CHECK(st.returned_with_neighbours >= 1);
+  CHECK(boundary_distance(b, s) < 1e-9);
+  CHECK(hex_quality(b, nullptr).sj_min >= hex_quality(a, nullptr).sj_min);
+  // sequential, in index order: the same mesh on one thread
+  HexMesh c;
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    c = optimize_hexes(g, s, p, nullptr);
+  }
+  CHECK(c.V == b.V);
+}
