@@ -51,8 +51,10 @@ struct OptimizeParams {
   bool release_boundary =
       true;  ///< last resort: boundary corners of hexes still inverted after untangling may leave the surface;
              ///< once untangled they go back as far as their hexes allow without lowering the minimum
-  int return_rings = 2;  ///< a released vertex that cannot go back alone goes back with its neighbours within this
-                         ///< many rings of hexes re-placed around it (max-min steps), 0 = alone, [0, 10]
+  int return_rings = 0;  ///< a released vertex that cannot go back alone goes back with its neighbours within this
+                         ///< many rings of hexes re-placed around it (max-min steps), 0 = alone, [0, 10]; an
+                         ///< option: 2 brings the boundary closer to the surface but lowered averages on the
+                         ///< results table (docs/optimize.md)
   double feature_angle =
       kFeatureAngle;  ///< degrees: an edge of the surface sharper than this is a crease (features.h), 0 = no
                       ///< crease handling; if the first result is poor (fallback_below_sj), a second candidate puts
