@@ -269,10 +269,9 @@ class Optimizer {
   /// or inverting a hex, but its neighbours, fixed while it tries, were placed around its released position.
   /// It goes back the whole way (then half of it), and the movable vertices within p_.return_rings rings of
   /// hexes around it (but other released ones) take max-min steps (kReturnSweeps passes, in index order); the
-  /// result is kept if no hex
-  /// around the moved vertices is inverted that was not and their minimum scaled Jacobian stays at least
-  /// `floor` (the mesh's minimum when the return began), else every vertex goes back to where it was.
-  /// Sequential, in index order: the same result for any thread count.
+  /// result is kept if no hex around the moved vertices is inverted that was not and their minimum scaled
+  /// Jacobian stays at least `floor` (the mesh's minimum when the return began), else every vertex goes back
+  /// to where it was. Sequential, in index order: the same result for any thread count.
   bool return_with_neighbours(int v, double floor) {
     // the rings, then the hexes whose measures the moves can change
     std::vector<int> ring{v};
