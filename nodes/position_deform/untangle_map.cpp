@@ -3,10 +3,13 @@
 
 #include "nodes/algorithms/hex_corners.h"
 #include "nodes/artefacts/cell_rings.h"
+#include "runtime/errors.h"
 #include "runtime/factorization.h"
 #include "runtime/lbfgs.h"
 #include "runtime/stopwatch.h"
 
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/OrderingMethods>
 #include <Eigen/SparseCore>
 #include <tbb/parallel_for.h>
 
@@ -168,16 +171,22 @@ class MapUntangler {
   }
 
   /// At ε -> 0 the barrier rejects many first trials (on the bench workload 2.25 trials per iteration):
-  /// the trials skip the gradient. With polish_preconditioned, the stiffness is factored here.
+  /// the trials skip the gradient. With a polish_preconditioner, the stiffness is factored here.
   LbfgsOptions polish_options() {
     LbfgsOptions o = options(p_.polish_iterations);
     o.gradient_on_accept = true;
-    if (p_.polish_preconditioned && ndof_ > 0) {
-      const auto t0 = std::chrono::steady_clock::now();
+    if (p_.polish_preconditioner == PolishPreconditioner::none || ndof_ == 0) return o;
+    const auto t0 = std::chrono::steady_clock::now();
+    if (p_.polish_preconditioner == PolishPreconditioner::cholesky) {
       auto factor = std::make_shared<CholmodFactorization>(stiffness());
-      st_.polish_factor_seconds += seconds_since(t0);
+      o.precondition = [factor](VecX& d) { d = factor->solve(d); };
+    } else {
+      using Incomplete = Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>;
+      auto factor = std::make_shared<Incomplete>(stiffness());
+      if (factor->info() != Eigen::Success) throw SolverError("map polish: the stiffness's incomplete Cholesky failed");
       o.precondition = [factor](VecX& d) { d = factor->solve(d); };
     }
+    st_.polish_factor_seconds += seconds_since(t0);
     return o;
   }
 

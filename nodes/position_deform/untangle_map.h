@@ -27,6 +27,10 @@
 
 namespace polyhex {
 
+/// How the polish's L-BFGS is preconditioned: not at all, by the stiffness's Cholesky factor, or by its
+/// incomplete Cholesky factor.
+enum class PolishPreconditioner { none, cholesky, incomplete_cholesky };
+
 struct MapUntangleParams {
   int rounds = 30;             ///< ε updates (each followed by one L-BFGS run); 0 = no untangling, [0, 1000]
   int lbfgs_iterations = 200;  ///< iterations of one L-BFGS run, [1, 100000]
@@ -39,9 +43,11 @@ struct MapUntangleParams {
   bool shrink = false;
   int polish_iterations = 200;  ///< after the rounds: L-BFGS iterations at ε -> 0 on the region, [0, 100000]
   /// The polish's L-BFGS preconditioned by the energy's stiffness at its start (per axis a weighted Laplacian
-  /// of the moving coordinates, the fixed ones its Dirichlet conditions; one CHOLMOD factorization, two
-  /// solves per iteration): far fewer iterations for the same energy (docs/speed.md).
-  bool polish_preconditioned = false;
+  /// of the moving coordinates, the fixed ones its Dirichlet conditions): far fewer iterations for the same
+  /// energy (docs/speed.md). `cholesky`: its CHOLMOD factorization (exact, costly to factor);
+  /// `incomplete_cholesky`: Eigen's incomplete Cholesky of it (AMD order, no fill; built in a fraction of the
+  /// time, a little weaker per iteration).
+  PolishPreconditioner polish_preconditioner = PolishPreconditioner::none;
   bool polish_everywhere = false;  ///< the polish moves every vertex that may move (not only the untangled region),
                                    ///< also when nothing was inverted: the map as a whole towards a conformal one
   double seconds = 0;              ///< wall-time cap, checked per L-BFGS iteration (the map so far is kept); 0 = none.
@@ -56,7 +62,7 @@ struct MapUntangleStats {
   long lbfgs_iterations = 0;                                 ///< L-BFGS iterations of the untangling rounds
   long polish_iterations = 0;                                ///< L-BFGS iterations of the polish
   double polish_energy_before = 0, polish_energy_after = 0;  ///< the polish's energy (ε -> 0) at its start and end
-  double polish_factor_seconds = 0;                          ///< polish_preconditioned: the stiffness's factorization
+  double polish_factor_seconds = 0;  ///< with a polish_preconditioner: the stiffness's assembly and factorization
   bool time_budget_hit = false;
   double seconds = 0;
 
@@ -87,6 +93,8 @@ struct MapUntangleStats {
 /// \return the number of inverted tets left (the flat ones included)
 /// \pre X.rows() == U.rows() == fixed_axes.size(); T indexes X; tets of X have positive volume
 /// \throw Interrupted (runtime/cancel.h) after SIGINT/SIGTERM, checked per L-BFGS iteration
+/// \throw SolverError when the polish's preconditioner cannot be factored (its stiffness is shifted to be
+///        positive definite, so only on non-finite positions)
 long untangle_polycube_map(const RowMatrixX3d& X, const RowMatrixX4i& T, RowMatrixX3d& U,
                            const std::vector<std::uint8_t>& fixed_axes, const MapUntangleParams& p = {},
                            MapUntangleStats* stats = nullptr);
