@@ -45,8 +45,9 @@ struct MapUntangleParams {
   /// The polish's L-BFGS preconditioned by the energy's stiffness at its start (per axis a weighted Laplacian
   /// of the moving coordinates, the fixed ones its Dirichlet conditions): far fewer iterations for the same
   /// energy (docs/speed.md). `cholesky`: its CHOLMOD factorization (exact, costly to factor);
-  /// `incomplete_cholesky`: Eigen's incomplete Cholesky of it (AMD order, no fill; built in a fraction of the
-  /// time, a little weaker per iteration).
+  /// `incomplete_cholesky`: Eigen's incomplete Cholesky of it (Lin and Moré's limited-memory factor: AMD order,
+  /// diagonal scaling, the largest entries, as many per column as the matrix has; built in a fraction of the
+  /// time, weaker per iteration).
   PolishPreconditioner polish_preconditioner = PolishPreconditioner::none;
   bool polish_everywhere = false;  ///< the polish moves every vertex that may move (not only the untangled region),
                                    ///< also when nothing was inverted: the map as a whole towards a conformal one
