@@ -551,17 +551,7 @@ void untangle(const TetMesh& input, const PolyCubeSegmentation& seg, const Posit
   up.seconds = p.untangle_seconds;
   up.polish_everywhere = p.map_polish == MapPolish::everywhere;
   up.polish_iterations = p.map_polish_iterations;
-  switch (p.map_polish_preconditioner) {
-    case MapPolishPreconditioner::none:
-      up.polish_preconditioner = PolishPreconditioner::none;
-      break;
-    case MapPolishPreconditioner::laplacian:
-      up.polish_preconditioner = PolishPreconditioner::cholesky;
-      break;
-    case MapPolishPreconditioner::incomplete_laplacian:
-      up.polish_preconditioner = PolishPreconditioner::incomplete_cholesky;
-      break;
-  }
+  up.polish_preconditioner = p.map_polish_preconditioner;
   untangle_polycube_map(input.V, input.T, U, fixed_axes, up, &st.untangle);
 }
 

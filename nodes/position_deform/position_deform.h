@@ -55,8 +55,6 @@ enum class FinalSolve { mvc_laplace, poisson };
 enum class LevelPlacement { balanced, push_up };
 /// What the polish after the untangling covers (step 5).
 enum class MapPolish { region, everywhere };
-/// How the polish's L-BFGS is preconditioned (untangle_map.h).
-enum class MapPolishPreconditioner { none, laplacian, incomplete_laplacian };
 
 struct PositionDeformParams {
   double edge_length = 0.01;     ///< hex edge length h, fraction of the input's reference length
@@ -83,9 +81,9 @@ struct PositionDeformParams {
       MapPolish::everywhere;  ///< after the untangling, L-BFGS at ε -> 0 on the Winslow energy of the whole map
                               ///< (everywhere: every tet towards a similarity) or of the untangled region only (region)
   int map_polish_iterations = 200;  ///< L-BFGS iterations of that polish (0 = none), [0, 100000]
-  MapPolishPreconditioner map_polish_preconditioner =
-      MapPolishPreconditioner::none;  ///< none (plain L-BFGS), laplacian (the stiffness's Cholesky factor) or
-                                      ///< incomplete_laplacian (its incomplete Cholesky factor; untangle_map.h)
+  PolishPreconditioner map_polish_preconditioner =
+      PolishPreconditioner::none;  ///< JSON none (plain L-BFGS), laplacian (the stiffness's Cholesky factor) or
+                                   ///< incomplete_laplacian (its incomplete Cholesky factor; untangle_map.h)
   double max_hexes = 2e7;     ///< refuse up front when the hex count estimate (volume / h³) exceeds this, [1e3, 2e9]
   bool feature_lines = true;  ///< creases inside a chart, straight along an axis of its plane, go onto lattice lines
                               ///< (feature_lines.h; step 4)

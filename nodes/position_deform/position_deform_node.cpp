@@ -48,9 +48,9 @@ const bool registered = register_node(
             .add("map_polish_iterations", &P::map_polish_iterations, "L-BFGS iterations of the polish (0 = none)", 0,
                  100000)
             .add_enum("map_polish_preconditioner", &P::map_polish_preconditioner,
-                      {{MapPolishPreconditioner::none, "none"},
-                       {MapPolishPreconditioner::laplacian, "laplacian"},
-                       {MapPolishPreconditioner::incomplete_laplacian, "incomplete_laplacian"}},
+                      {{PolishPreconditioner::none, "none"},
+                       {PolishPreconditioner::cholesky, "laplacian"},
+                       {PolishPreconditioner::incomplete_cholesky, "incomplete_laplacian"}},
                       "the polish's L-BFGS plain, or preconditioned by the map energy's stiffness: its Cholesky factor "
                       "(laplacian) or its incomplete Cholesky factor (incomplete_laplacian); fewer iterations")
             .add("max_hexes", &P::max_hexes, "refuse up front when volume / h^3 exceeds this", 1e3, 2e9)

@@ -201,14 +201,16 @@ TEST_CASE("polish_everywhere: a map without folds moves towards a conformal one,
   SECTION(
       "preconditioned by the stiffness (its Cholesky or incomplete Cholesky factor): lower in 10 iterations "
       "than plain L-BFGS in 10, planes kept") {
+    MapUntangleParams p;
+    p.polish_everywhere = true;
+    p.polish_iterations = 10;
+    MapUntangleStats plain;
+    RowMatrixX3d Up = U0;
+    CHECK(untangle_polycube_map(g.X, g.T, Up, g.fixed, p, &plain) == 0);
     for (PolishPreconditioner kind : {PolishPreconditioner::cholesky, PolishPreconditioner::incomplete_cholesky}) {
       INFO("preconditioner " << int(kind));
-      MapUntangleParams p;
-      p.polish_everywhere = true;
-      p.polish_iterations = 10;
-      MapUntangleStats plain, pre;
-      RowMatrixX3d Up = U0, Uq = U0;
-      CHECK(untangle_polycube_map(g.X, g.T, Up, g.fixed, p, &plain) == 0);
+      MapUntangleStats pre;
+      RowMatrixX3d Uq = U0;
       p.polish_preconditioner = kind;
       CHECK(untangle_polycube_map(g.X, g.T, Uq, g.fixed, p, &pre) == 0);
       CHECK(inverted(Uq, g.T) == 0);
