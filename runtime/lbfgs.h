@@ -12,6 +12,8 @@
 #include <cmath>
 #include <deque>
 #include <functional>
+#include <limits>
+#include <type_traits>
 #include <vector>
 
 namespace polyhex {
@@ -40,17 +42,29 @@ enum class LbfgsEnd {
 };
 
 /// Minimises f from x (updated in place). `f(x, g)` returns the energy at x and, when g is not null, writes
-/// its gradient (g has x's size). `stop(done, x, after_step)` is asked before every iteration
-/// (after_step false) and after each accepted step (after_step true, done counting this step), with
-/// done = the iterations done; true ends the run. `count` (if not null) is incremented per iteration. Checks
-/// SIGINT/SIGTERM per iteration. \throw Interrupted (runtime/cancel.h)
+/// its gradient (g has x's size). An energy may take a third argument, `f(x, g, accept_up_to)`: the line
+/// search's trials that do not ask for the gradient pass the largest value they accept (every other call
+/// passes +inf), and f may return +inf as soon as it knows its value is above that: the trial is rejected
+/// either way, so the iterates are those of the value computed to the end. `stop(done, x, after_step)` is
+/// asked before every iteration (after_step false) and after each accepted step (after_step true, done
+/// counting this step), with done = the iterations done; true ends the run. `count` (if not null) is
+/// incremented per iteration. Checks SIGINT/SIGTERM per iteration. \throw Interrupted (runtime/cancel.h)
 template <class Energy, class Stop>
 LbfgsEnd lbfgs_minimize(Eigen::VectorXd& x, Energy&& f, const LbfgsOptions& o, Stop&& stop, long* count = nullptr) {
   using VecX = Eigen::VectorXd;
   constexpr int kMemory = 8;
+  constexpr double kNoBound = std::numeric_limits<double>::infinity();
+  // with a three-argument energy, every other call passes no bound
+  auto full = [&f](const VecX& y, VecX* grad) {
+    if constexpr (std::is_invocable_v<Energy&, const VecX&, VecX*, double>)
+      return f(y, grad, kNoBound);
+    else
+      return f(y, grad);
+  };
   std::deque<VecX> S, Y;
+  std::deque<double> SY;  // s'y of each pair, taken once (y's has its bits: the same sum of the same products)
   VecX g(x.size()), gn(x.size());
-  double e = f(x, &g);
+  double e = full(x, &g);
   for (int it = 0; it < o.iterations; ++it) {
     if (stop(it, x, false)) return LbfgsEnd::Stopped;
     throw_if_interrupted();
@@ -60,7 +74,7 @@ LbfgsEnd lbfgs_minimize(Eigen::VectorXd& x, Energy&& f, const LbfgsOptions& o, S
     VecX d = -g;
     std::vector<double> alpha(S.size());
     for (int i = int(S.size()) - 1; i >= 0; --i) {
-      alpha[size_t(i)] = S[size_t(i)].dot(d) / Y[size_t(i)].dot(S[size_t(i)]);
+      alpha[size_t(i)] = S[size_t(i)].dot(d) / SY[size_t(i)];
       d -= alpha[size_t(i)] * Y[size_t(i)];
     }
     if (o.precondition) {
@@ -68,19 +82,20 @@ LbfgsEnd lbfgs_minimize(Eigen::VectorXd& x, Energy&& f, const LbfgsOptions& o, S
       if (!S.empty()) {
         VecX my = Y.back();
         o.precondition(my);
-        d *= S.back().dot(Y.back()) / Y.back().dot(my);
+        d *= SY.back() / Y.back().dot(my);
       }
     } else if (!S.empty()) {
-      d *= S.back().dot(Y.back()) / Y.back().squaredNorm();
+      d *= SY.back() / Y.back().squaredNorm();
     }
     for (size_t i = 0; i < S.size(); ++i) {
-      const double beta = Y[i].dot(d) / Y[i].dot(S[i]);
+      const double beta = Y[i].dot(d) / SY[i];
       d += (alpha[i] - beta) * S[i];
     }
     double slope = g.dot(d);
     if (!(slope < 0)) {  // not a descent direction: restart from steepest descent
       S.clear();
       Y.clear();
+      SY.clear();
       d = -g;
       if (o.precondition) o.precondition(d);
       slope = g.dot(d);
@@ -91,23 +106,29 @@ LbfgsEnd lbfgs_minimize(Eigen::VectorXd& x, Energy&& f, const LbfgsOptions& o, S
     bool ok = false;
     for (int k = 0; k < o.max_halvings; ++k, step *= 0.5) {
       xn = x + step * d;
-      en = f(xn, o.gradient_on_accept ? nullptr : &gn);
-      if (std::isfinite(en) && en <= e + 1e-4 * step * slope) {
+      const double accept_up_to = e + 1e-4 * step * slope;
+      if constexpr (std::is_invocable_v<Energy&, const VecX&, VecX*, double>)
+        en = o.gradient_on_accept ? f(xn, nullptr, accept_up_to) : f(xn, &gn, kNoBound);
+      else
+        en = f(xn, o.gradient_on_accept ? nullptr : &gn);
+      if (std::isfinite(en) && en <= accept_up_to) {
         ok = true;
         break;
       }
     }
-    if (ok && o.gradient_on_accept) en = f(xn, &gn);
+    if (ok && o.gradient_on_accept) en = full(xn, &gn);
     if (!ok) return LbfgsEnd::Stalled;
     VecX s = xn - x, y = gn - g;
     x = xn;
     g = gn;
     const bool converged = e - en <= 1e-12 * std::max(1.0, std::abs(e));
     e = en;
-    if (s.dot(y) > 1e-16 * s.norm() * y.norm()) {
+    const double sy = s.dot(y);
+    if (sy > 1e-16 * s.norm() * y.norm()) {
       S.push_back(std::move(s));
       Y.push_back(std::move(y));
-      if (int(S.size()) > kMemory) S.pop_front(), Y.pop_front();
+      SY.push_back(sy);
+      if (int(S.size()) > kMemory) S.pop_front(), Y.pop_front(), SY.pop_front();
     }
     if (converged) return LbfgsEnd::Converged;
     if (stop(it + 1, x, true)) return LbfgsEnd::Stopped;

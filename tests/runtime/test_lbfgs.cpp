@@ -134,6 +134,54 @@ TEST_CASE("lbfgs with gradient_on_accept takes the same iterates, with gradients
   CHECK(trials > it_a);  // some first trials were rejected, so the option saved gradients
 }
 
+TEST_CASE("lbfgs with an energy that takes the acceptance bound: the same iterates when it gives up above it",
+          "[lbfgs]") {
+  // a barrier (-log) along each axis with its minimiser close to it: many trials leave the domain. The bounded
+  // energy stops summing at the first term above the bound (each term is positive: the sum is at least any).
+  long cut = 0, bounded_calls = 0;
+  auto term = [](const Eigen::VectorXd& x, Eigen::Index i, Eigen::VectorXd* g) {
+    const double a = 1.0 + double(i * i), t = 1.0 - x[i];
+    if (!(t > 0)) return std::numeric_limits<double>::infinity();
+    if (g) (*g)[i] = 2 * a * x[i] + 1.0 / t - 30.0;
+    return a * x[i] * x[i] - std::log(t) - 30.0 * x[i] + 40.0;
+  };
+  auto f2 = [&](const Eigen::VectorXd& x, Eigen::VectorXd* g) {
+    double e = 0;
+    for (Eigen::Index i = 0; i < x.size(); ++i) e += term(x, i, g);
+    return e;
+  };
+  auto f3 = [&](const Eigen::VectorXd& x, Eigen::VectorXd* g, double accept_up_to) {
+    const bool bounded = accept_up_to < std::numeric_limits<double>::infinity();
+    bounded_calls += bounded;
+    CHECK((!bounded || g == nullptr));  // a bound only where no gradient is asked
+    double e = 0;
+    for (Eigen::Index i = 0; i < x.size(); ++i) {
+      const double t = term(x, i, g);
+      if (bounded && !(t <= accept_up_to)) return ++cut, std::numeric_limits<double>::infinity();
+      e += t;
+    }
+    return e;
+  };
+  LbfgsOptions o;
+  o.iterations = 60;
+  o.first_move = 1.0;
+  o.gradient_on_accept = true;
+  auto never = [](int, const Eigen::VectorXd&, bool) { return false; };
+  Eigen::VectorXd a = Eigen::VectorXd::Constant(12, -2.0), b = a;
+  long it_a = 0, it_b = 0;
+  lbfgs_minimize(a, f2, o, never, &it_a);
+  lbfgs_minimize(b, f3, o, never, &it_b);
+  CHECK(it_a == it_b);
+  CHECK(a == b);  // bit for bit
+  CHECK(bounded_calls > it_b);
+  CHECK(cut > 0);                // some trials were given up early
+  o.gradient_on_accept = false;  // every trial asks for the gradient: no bound is passed
+  bounded_calls = 0;
+  Eigen::VectorXd c = Eigen::VectorXd::Constant(12, -2.0);
+  lbfgs_minimize(c, f3, o, never);
+  CHECK(bounded_calls == 0);
+}
+
 TEST_CASE("lbfgs with the exact Hessian as preconditioner solves an ill-conditioned quadratic at once", "[lbfgs]") {
   // f = Σ a_i (x_i - i)², a from 1 to 1e6; M = diag(2 a): the preconditioned steepest descent is Newton's step
   const int n = 30;
