@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <type_traits>
 
 namespace polyhex::optimize_detail {
 
@@ -50,6 +51,37 @@ inline double fast_cbrt(double x) {
   return y - (y * y * y - x) / (3.0 * y * y);
 }
 
+/// Lanes of doubles, as GCC and Clang's vector extensions give them: arithmetic is lane by lane, each
+/// operation IEEE's as on one double (no lane sees another), so a computation written once for `double`
+/// and for Lanes gives every lane the bits of the scalar one. On x86-64 a Lanes is two SSE2 registers.
+using Lanes = double __attribute__((vector_size(32)));
+/// The 64-bit integers of a Lanes' bits (a cast between the two reinterprets them).
+using LaneBits = long long __attribute__((vector_size(32)));
+constexpr int kLanes = int(sizeof(Lanes) / sizeof(double));
+
+/// The mantissa part of libm_cbrt (below): m^(1/3) for m in [0.5, 1), a degree-6 polynomial and one Halley
+/// step, times f (2^((e mod 3)/3)). For double and for Lanes.
+template <class V>
+inline V libm_cbrt_mantissa(V m, V f) {
+  const V u = (0.354895765043919860 +
+               ((1.50819193781584896 +
+                 ((-2.11499494167371287 +
+                   ((2.44693122563534430 +
+                     ((-1.83469277483613086 + (0.784932344976639262 - 0.145263899385486377 * m) * m) * m)) *
+                    m)) *
+                  m)) *
+                m));
+  const V t2 = u * u * u;
+  return u * (t2 + 2.0 * m) / (2.0 * t2 + m) * f;
+}
+
+/// 2^((e mod 3)/3) for e mod 3 in -2..2 (C's remainder), libm_cbrt's factor.
+inline double libm_cbrt_factor(long long e_mod_3) {
+  constexpr double kCbrt2 = 1.2599210498948731648, kSqrCbrt2 = 1.5874010519681994748;
+  constexpr double kFactor[5] = {1.0 / kSqrCbrt2, 1.0 / kCbrt2, 1.0, kCbrt2, kSqrCbrt2};
+  return kFactor[2 + e_mod_3];
+}
+
 /// x^(1/3) with the arithmetic of GNU libm's cbrt (glibc's sysdeps/ieee754/dbl-64/s_cbrt.c, the same since
 /// 1997): |x| = m 2^e with m in [0.5, 1); a degree-6 polynomial in m, one Halley step, times 2^((e mod 3)/3)
 /// and 2^(e div 3). The same operations in the same order give the same bits as std::cbrt on Debian's libm
@@ -65,18 +97,7 @@ inline double libm_cbrt(double x) {
   const std::uint64_t mbits = (bits & 0x000fffffffffffffULL) | (std::uint64_t(1022) << 52);
   double m;
   std::memcpy(&m, &mbits, sizeof m);
-  constexpr double kCbrt2 = 1.2599210498948731648, kSqrCbrt2 = 1.5874010519681994748;
-  constexpr double kFactor[5] = {1.0 / kSqrCbrt2, 1.0 / kCbrt2, 1.0, kCbrt2, kSqrCbrt2};
-  const double u = (0.354895765043919860 +
-                    ((1.50819193781584896 +
-                      ((-2.11499494167371287 +
-                        ((2.44693122563534430 +
-                          ((-1.83469277483613086 + (0.784932344976639262 - 0.145263899385486377 * m) * m) * m)) *
-                         m)) *
-                       m)) *
-                     m));
-  const double t2 = u * u * u;
-  const double y = u * (t2 + 2.0 * m) / (2.0 * t2 + m) * kFactor[2 + e % 3];
+  const double y = libm_cbrt_mantissa(m, libm_cbrt_factor(e % 3));
   // times 2^(e / 3) (|e / 3| <= 341: a normal power of two, and an exact product)
   const std::uint64_t pbits = std::uint64_t(1023 + e / 3) << 52;
   double p;
@@ -84,11 +105,68 @@ inline double libm_cbrt(double x) {
   return (x > 0 ? y : -y) * p;
 }
 
+/// libm_cbrt of every lane: the same bits as libm_cbrt lane by lane.
+inline Lanes libm_cbrt(Lanes x) {
+  const LaneBits bits = (LaneBits)x;
+  const LaneBits biased = (bits >> 52) & 0x7ff;
+  const LaneBits e = biased - 1022;
+  const Lanes m = (Lanes)((bits & 0x000fffffffffffffLL) | (1022LL << 52));
+  Lanes f;
+  for (int l = 0; l < kLanes; ++l) f[l] = libm_cbrt_factor(e[l] % 3);
+  const Lanes y = libm_cbrt_mantissa(m, f);
+  const Lanes p = (Lanes)((1023 + e / 3) << 52);
+  Lanes r = (Lanes)((LaneBits)y ^ (bits & (1LL << 63))) * p;  // y with x's sign, times 2^(e div 3)
+  for (int l = 0; l < kLanes; ++l)
+    if (biased[l] == 0 || biased[l] == 0x7ff) r[l] = std::cbrt(x[l]);
+  return r;
+}
+
 /// How winslow_term takes the cube root: the PolyCube map's untangling keeps libm's bits (libm_cbrt; its
 /// output feeds every later stage, which a last-bit change would perturb); the hex optimizer takes fast_cbrt.
 enum class CubeRoot { exact, fast };
 
+inline double lane_sqrt(double x) { return std::sqrt(x); }
+inline Lanes lane_sqrt(Lanes x) {
+  for (int l = 0; l < kLanes; ++l) x[l] = std::sqrt(x[l]);
+  return x;
+}
+
+/// winslow_term (below) on J[row][col], for double or Lanes (CubeRoot::fast for double only). Its operations
+/// are those Eigen 3.4 performs for winslow_term's expressions on x86-64 (SSE2), in the same order:
+/// squaredNorm sums the column-major entries as two interleaved pairs of pairs, then the last; the
+/// determinant is Eigen's cofactor expansion along the first row. [winslow] tests compare the bits.
+template <class V>
+inline V winslow_term_of(const V (&J)[3][3], double eps, std::common_type_t<V> (*dJ)[3],
+                         CubeRoot root = CubeRoot::exact) {
+  auto minor = [&](int a, int b, int c) { return J[0][a] * (J[1][b] * J[2][c] - J[1][c] * J[2][b]); };
+  const V D = (minor(0, 1, 2) - minor(1, 0, 2)) + minor(2, 0, 1);
+  const V r = lane_sqrt(eps * eps + D * D);
+  const V c = 0.5 * (D + r);  // chi(D, eps)
+  V c23;
+  if constexpr (std::is_same_v<V, double>)
+    c23 = root == CubeRoot::fast ? fast_cbrt(c * c) : libm_cbrt(c * c);
+  else
+    c23 = libm_cbrt(c * c);
+  const V n2 = ((J[0][0] * J[0][0] + J[2][0] * J[2][0]) + (J[1][1] * J[1][1] + J[0][2] * J[0][2]) +
+                ((J[1][0] * J[1][0] + J[0][1] * J[0][1]) + (J[2][1] * J[2][1] + J[1][2] * J[1][2]))) +
+               J[2][2] * J[2][2];
+  if (dJ) {
+    const V dchi = 0.5 * (1.0 + D / r);
+    const V s1 = 2.0 / (3.0 * c23), s2 = (2.0 / 9.0) * n2 / (c23 * c) * dchi;
+    for (int j = 0; j < 3; ++j) {  // d det / dJ: column j is the cross product of the next two columns
+      const int p = (j + 1) % 3, q = (j + 2) % 3;
+      dJ[0][j] = s1 * J[0][j] - s2 * (J[1][p] * J[2][q] - J[2][p] * J[1][q]);
+      dJ[1][j] = s1 * J[1][j] - s2 * (J[2][p] * J[0][q] - J[0][p] * J[2][q]);
+      dJ[2][j] = s1 * J[2][j] - s2 * (J[0][p] * J[1][q] - J[1][p] * J[0][q]);
+    }
+  }
+  return n2 / (3.0 * c23);
+}
+
 /// |J|_F² / (3 χ(det J, ε)^{2/3}) (1 for a rotation as ε -> 0) and, if dJ, its gradient with respect to J.
+/// As Eigen expressions (the optimizer's form: Eigen's packets make its gradient twice as fast as
+/// winslow_term_of's for one J); winslow_term_of is the same arithmetic written out for lanes, and [winslow]
+/// tests hold the two to the same bits.
 inline double winslow_term(const Eigen::Matrix3d& J, double eps, Eigen::Matrix3d* dJ, CubeRoot root = CubeRoot::exact) {
   const double D = J.determinant();
   const double c = chi(D, eps);
@@ -103,6 +181,44 @@ inline double winslow_term(const Eigen::Matrix3d& J, double eps, Eigen::Matrix3d
     *dJ = (2.0 / (3.0 * c23)) * J - (2.0 / 9.0) * n2 / (c23 * c) * dchi * cof;
   }
   return n2 / (3.0 * c23);
+}
+
+/// Lane l of v (v itself for a double).
+template <class V>
+inline double& lane(V& v, int l) {
+  if constexpr (std::is_same_v<V, double>)
+    return v;
+  else
+    return reinterpret_cast<double*>(&v)[l];
+}
+
+/// One tet's term of the PolyCube map's energy (nodes/position_deform/untangle_map.cpp), w winslow_term(D R,
+/// ε), and if G its gradient with respect to the tet's corners (G[k] of corner k); D the PolyCube edge
+/// vectors as columns, R the inverse of the input's. For double, or for Lanes of tets side by side. The
+/// products take Eigen 3.4's order for Matrix3d products on x86-64 (SSE2): rows 0 and 1 as one packet,
+/// (a0 b0 + a1 b1) + a2 b2, and row 2 alone, a0 b0 + (a1 b1 + a2 b2); so the bits are those of the Eigen
+/// expressions this replaced ([winslow] tests compare them).
+template <class V>
+inline V tet_winslow_term(const V (&D)[3][3], const V (&R)[3][3], V w, double eps, std::common_type_t<V> (*G)[3]) {
+  auto dot = [](int row, V a0, V a1, V a2, V b0, V b1, V b2) {
+    return row < 2 ? (a0 * b0 + a1 * b1) + a2 * b2 : a0 * b0 + (a1 * b1 + a2 * b2);
+  };
+  V J[3][3];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) J[i][j] = dot(i, D[i][0], D[i][1], D[i][2], R[0][j], R[1][j], R[2][j]);
+  if (!G) return w * winslow_term_of(J, eps, nullptr);
+  V dJ[3][3];
+  const V term = w * winslow_term_of(J, eps, dJ);
+  V wdJ[3][3], dD[3][3];  // d term / d D = w dJ R^T
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) wdJ[i][j] = w * dJ[i][j];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) dD[i][j] = dot(i, wdJ[i][0], wdJ[i][1], wdJ[i][2], R[j][0], R[j][1], R[j][2]);
+  for (int i = 0; i < 3; ++i) {
+    G[0][i] = -(dD[i][0] + (dD[i][1] + dD[i][2]));
+    for (int k = 0; k < 3; ++k) G[k + 1][i] = dD[i][k];
+  }
+  return term;
 }
 
 }  // namespace polyhex::optimize_detail

@@ -11,14 +11,18 @@
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/OrderingMethods>
 #include <Eigen/SparseCore>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <initializer_list>
 #include <limits>
 #include <memory>
+#include <type_traits>
 
 namespace polyhex {
 namespace {
@@ -27,8 +31,11 @@ using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
 using Mat43 = Eigen::Matrix<double, 4, 3>;
 using VecX = Eigen::VectorXd;
+using optimize_detail::kLanes;
+using optimize_detail::lane;
+using optimize_detail::Lanes;
 using optimize_detail::libm_cbrt;
-using optimize_detail::winslow_term;
+using optimize_detail::tet_winslow_term;
 
 /// Tets whose input volume is below this fraction of the mean do not set ε (see min_det()).
 constexpr double kSliverWeight = 0.3;
@@ -161,8 +168,8 @@ class MapUntangler {
         return false;
       };
       if (lbfgs_minimize(
-              x, [&](const VecX& y, VecX* g) { return energy(y, 1e-10, g); }, polish_options(), stop,
-              &st_.polish_iterations) != LbfgsEnd::Stopped) {
+              x, [&](const VecX& y, VecX* g, double accept_up_to) { return energy(y, 1e-10, g, accept_up_to); },
+              polish_options(), stop, &st_.polish_iterations) != LbfgsEnd::Stopped) {
         apply(x);
         if (count_inverted() == 0) good = x;
       }
@@ -392,17 +399,17 @@ class MapUntangler {
     return *std::min_element(m.begin(), m.end());
   }
 
-  double energy(const VecX& x, double eps, VecX* g) {
+  /// The energy at base + x (the map moved there) and, if g, its gradient. With no gradient asked and a
+  /// finite `accept_up_to` (the line search's trials, runtime/lbfgs.h), +inf as soon as one tet's term is
+  /// above it: the terms are positive, so their sum in any order is at least its largest term.
+  double energy(const VecX& x, double eps, VecX* g, double accept_up_to = kNoBound) {
     apply(x);
-    tbb::parallel_for(size_t(0), active_.size(), [&](size_t a) {
-      Mat3 dJ;
-      tet_energy_[a] = weight_[a] * winslow_term(jacobian(a), eps, g ? &dJ : nullptr);
-      if (g) {
-        const Mat3 dD = weight_[a] * dJ * rinv_[a].transpose();  // d energy / d (edge vectors as columns)
-        tet_grad_[a].row(0) = -dD.rowwise().sum().transpose();
-        for (int k = 0; k < 3; ++k) tet_grad_[a].row(k + 1) = dD.col(k).transpose();
-      }
-    });
+    if (!g && accept_up_to < kNoBound) {
+      if (!terms_up_to(eps, accept_up_to)) return kNoBound;
+    } else {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, active_.size(), 256),
+                        [&](const tbb::blocked_range<size_t>& r) { terms(r.begin(), r.end(), eps, g != nullptr); });
+    }
     double e = 0;
     for (double te : tet_energy_) e += te;
     if (g) {
@@ -415,6 +422,65 @@ class MapUntangler {
     }
     return e;
   }
+
+  /// The tets' energy terms into tet_energy_, in blocks taken in index order by every thread: false (and
+  /// the rest left undone) once a term is above `bound` or not a number. On the bench workload the polish
+  /// rejects 270 of its 470 trials, 260 of them with a term above the bound, the first at 27 % of the tets
+  /// on average.
+  bool terms_up_to(double eps, double bound) {
+    constexpr size_t kBlock = 1024;
+    const size_t n = active_.size(), blocks = (n + kBlock - 1) / kBlock;
+    std::atomic<size_t> next{0};
+    std::atomic<bool> over{false};
+    const int workers = std::max(1, tbb::this_task_arena::max_concurrency());
+    tbb::parallel_for(
+        0, workers,
+        [&](int) {
+          for (size_t b; !over.load(std::memory_order_relaxed) && (b = next.fetch_add(1)) < blocks;) {
+            const size_t begin = b * kBlock, end = std::min(n, begin + kBlock);
+            terms(begin, end, eps, false);
+            for (size_t a = begin; a < end; ++a)
+              if (!(tet_energy_[a] <= bound)) over.store(true, std::memory_order_relaxed);
+          }
+        },
+        tbb::simple_partitioner());
+    return !over.load();
+  }
+
+  /// The terms of active tets [begin, end) into tet_energy_ and, if grad, their gradients into tet_grad_:
+  /// kLanes tets at a time, the rest one by one (the same bits either way).
+  void terms(size_t begin, size_t end, double eps, bool grad) {
+    size_t a = begin;
+    for (; a + kLanes <= end; a += kLanes) terms_of<Lanes>(a, eps, grad);
+    for (; a < end; ++a) terms_of<double>(a, eps, grad);
+  }
+
+  template <class V>
+  void terms_of(size_t a, double eps, bool grad) {
+    constexpr int W = std::is_same_v<V, double> ? 1 : kLanes;
+    V D[3][3], R[3][3], G[4][3], w;
+    for (int l = 0; l < W; ++l) {
+      const int t = active_[a + size_t(l)];
+      const double* u0 = U_.row(T_(t, 0)).data();
+      for (int k = 0; k < 3; ++k) {
+        const double* uk = U_.row(T_(t, k + 1)).data();
+        for (int i = 0; i < 3; ++i) lane(D[i][k], l) = uk[i] - u0[i];
+      }
+      const Mat3& r = rinv_[a + size_t(l)];
+      for (int k = 0; k < 3; ++k)
+        for (int j = 0; j < 3; ++j) lane(R[k][j], l) = r(k, j);
+      lane(w, l) = weight_[a + size_t(l)];
+    }
+    V e = tet_winslow_term(D, R, w, eps, grad ? G : nullptr);
+    for (int l = 0; l < W; ++l) {
+      tet_energy_[a + size_t(l)] = lane(e, l);
+      if (grad)
+        for (int k = 0; k < 4; ++k)
+          for (int i = 0; i < 3; ++i) tet_grad_[a + size_t(l)](k, i) = lane(G[k][i], l);
+    }
+  }
+
+  static constexpr double kNoBound = std::numeric_limits<double>::infinity();
 
   const RowMatrixX3d& X_;
   const RowMatrixX4i& T_;
