@@ -2,6 +2,8 @@
 
 #include "runtime/errors.h"
 
+#include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <regex>
@@ -121,8 +123,10 @@ json evaluate_vars(const json& vars, const std::string& source) {
         if (!f.is_number()) throw ConfigError(where + ": `${" + m[2].str() + "}` is not a number (" + f.dump() + ")");
         product *= f.get<double>();
       } else {
-        product *= std::stod(m[1].str());
+        product *= std::strtod(m[1].str().c_str(), nullptr);  // not std::stod: 1e999 is an answer, not a throw
       }
+      if (!std::isfinite(product))
+        throw ConfigError(where + ": `" + s + "` is not a finite number (a factor or the product overflows)");
       pos += size_t(m.length(0));
       if (pos == s.size()) break;
       if (s[pos] != '*')

@@ -3,7 +3,8 @@
 // crash, not throw std::bad_alloc / std::length_error, not try to allocate what a header count says.
 //
 // The bugs they caught: readers reserved/resized by a header count before checking it against the file
-// (now TextCursor::checked_count); load_config_json let nlohmann's out_of_range (1e400) escape.
+// (now TextCursor::checked_count); load_config_json let nlohmann's out_of_range (1e400) escape; a vars
+// product ("1e999 * ${two}") let std::stod's out_of_range escape, and one that overflowed became inf.
 #include "graph/config.h"
 #include "graph/pipeline.h"
 #include "runtime/errors.h"
