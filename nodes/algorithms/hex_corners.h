@@ -121,6 +121,21 @@ inline Lanes libm_cbrt(Lanes x) {
   return r;
 }
 
+/// fast_cbrt of every lane: the same bits as fast_cbrt lane by lane.
+inline Lanes fast_cbrt(Lanes x) {
+  using LaneWords = unsigned long long __attribute__((vector_size(32)));
+  Lanes y = (Lanes)((LaneWords)x / 3 + 0x2a9f7893782da1ceULL);
+  for (int k = 0; k < 2; ++k) {
+    const Lanes y3 = y * y * y;
+    y *= (y3 + 2.0 * x) / (2.0 * y3 + x);
+  }
+  y = y - (y * y * y - x) / (3.0 * y * y);
+  for (int l = 0; l < kLanes; ++l)
+    if (!(x[l] >= std::numeric_limits<double>::min()) || !(x[l] <= std::numeric_limits<double>::max()))
+      y[l] = std::cbrt(x[l]);
+  return y;
+}
+
 /// How winslow_term takes the cube root: the PolyCube map's untangling keeps libm's bits (libm_cbrt; its
 /// output feeds every later stage, which a last-bit change would perturb); the hex optimizer takes fast_cbrt.
 enum class CubeRoot { exact, fast };
@@ -131,7 +146,7 @@ inline Lanes lane_sqrt(Lanes x) {
   return x;
 }
 
-/// winslow_term (below) on J[row][col], for double or Lanes (CubeRoot::fast for double only). Its operations
+/// winslow_term (below) on J[row][col], for double or Lanes. Its operations
 /// are those Eigen 3.4 performs for winslow_term's expressions on x86-64 (SSE2), in the same order:
 /// squaredNorm sums the column-major entries as two interleaved pairs of pairs, then the last; the
 /// determinant is Eigen's cofactor expansion along the first row. [winslow] tests compare the bits.
@@ -143,10 +158,7 @@ inline V winslow_term_of(const V (&J)[3][3], double eps, std::common_type_t<V> (
   const V r = lane_sqrt(eps * eps + D * D);
   const V c = 0.5 * (D + r);  // chi(D, eps)
   V c23;
-  if constexpr (std::is_same_v<V, double>)
-    c23 = root == CubeRoot::fast ? fast_cbrt(c * c) : libm_cbrt(c * c);
-  else
-    c23 = libm_cbrt(c * c);
+  c23 = root == CubeRoot::fast ? fast_cbrt(c * c) : libm_cbrt(c * c);
   const V n2 = ((J[0][0] * J[0][0] + J[2][0] * J[2][0]) + (J[1][1] * J[1][1] + J[0][2] * J[0][2]) +
                 ((J[1][0] * J[1][0] + J[0][1] * J[0][1]) + (J[2][1] * J[2][1] + J[1][2] * J[1][2]))) +
                J[2][2] * J[2][2];

@@ -5,10 +5,12 @@
 #include "nodes/algorithms/hex_quality.h"
 #include "nodes/artefacts/cell_rings.h"
 #include "nodes/artefacts/hex_topology.h"
+#include "nodes/optimize/hex_terms.h"
 #include "runtime/cancel.h"
 #include "runtime/lbfgs.h"
 #include "runtime/stopwatch.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -16,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
 namespace polyhex {
@@ -25,91 +28,40 @@ using Vec3 = Eigen::Vector3d;
 using Mat83 = Eigen::Matrix<double, 8, 3>;
 using VecX = Eigen::VectorXd;
 
-/// The t-th Jacobian J_t of a hex with corners P (8 by 3, VTK_HEXAHEDRON order): t < 8 the corners (edge
-/// vectors ordered for a positive determinant), t = 8 the centre principal axes (Verdict), each a mean of
-/// four parallel edges: X1 = (p1-p0)+(p2-p3)+(p5-p4)+(p6-p7), X2 = (p3-p0)+(p2-p1)+(p7-p4)+(p6-p5),
-/// X3 = (p4-p0)+(p5-p1)+(p6-p2)+(p7-p3), each over 4. (Linear in P: J_t = P^T W_t with a sparse W_t,
-/// applied here without forming it.)
-constexpr int kCentreAxis[3][4][2] = {
-    {{1, 0}, {2, 3}, {5, 4}, {6, 7}}, {{3, 0}, {2, 1}, {7, 4}, {6, 5}}, {{4, 0}, {5, 1}, {6, 2}, {7, 3}}};
-Eigen::Matrix3d jacobian(const Mat83& P, size_t t) {
-  using optimize_detail::kCorners;
-  Eigen::Matrix3d J;
-  if (t < 8) {
-    for (int c = 0; c < 3; ++c) J.col(c) = (P.row(kCorners[t][c + 1]) - P.row(kCorners[t][0])).transpose();
-  } else {
-    for (int c = 0; c < 3; ++c) {
-      Vec3 x = Vec3::Zero();
-      for (const auto& e : kCentreAxis[c]) x += (P.row(e[0]) - P.row(e[1])).transpose();
-      J.col(c) = 0.25 * x;
-    }
-  }
-  return J;
-}
-/// G += W[t] dJ^T: the gradient with respect to the corners of a function of J_t whose gradient is dJ.
-void scatter(Mat83& G, size_t t, const Eigen::Matrix3d& dJ) {
-  using optimize_detail::kCorners;
-  if (t < 8) {
-    for (int c = 0; c < 3; ++c) {
-      G.row(kCorners[t][c + 1]) += dJ.col(c).transpose();
-      G.row(kCorners[t][0]) -= dJ.col(c).transpose();
-    }
-  } else {
-    for (int c = 0; c < 3; ++c)
-      for (const auto& e : kCentreAxis[c]) {
-        G.row(e[0]) += 0.25 * dJ.col(c).transpose();
-        G.row(e[1]) -= 0.25 * dJ.col(c).transpose();
-      }
-  }
+using optimize_detail::kLanes;
+using optimize_detail::lane;
+using optimize_detail::Lanes;
+
+/// A hex's corners P[corner][coordinate] from an 8 x 3 matrix.
+void corners_of(const Mat83& P, double (&out)[8][3]) {
+  for (int k = 0; k < 8; ++k)
+    for (int i = 0; i < 3; ++i) out[k][i] = P(k, i);
 }
 
-using optimize_detail::winslow_term;
+/// An 8 x 3 matrix from G[corner][coordinate].
+void matrix_of(const double (&G)[8][3], Mat83& out) {
+  for (int k = 0; k < 8; ++k)
+    for (int i = 0; i < 3; ++i) out(k, i) = G[k][i];
+}
 
-/// Energy of the hex with corners P (8 by 3, already over the scale) and its gradient G with respect to P.
+/// Energy of the hex with corners P (8 by 3, already over the scale) and its gradient G with respect to P
+/// (optimize_detail::hex_energy_of).
 double hex_energy(const Mat83& P, double eps, Mat83* G) {
-  double e = 0;
-  if (G) G->setZero();
-  Eigen::Matrix3d dJ;
-  for (size_t t = 0; t < 9; ++t) {
-    e += winslow_term(jacobian(P, t), eps, G ? &dJ : nullptr, optimize_detail::CubeRoot::fast);
-    if (G) scatter(*G, t, dJ);
-  }
+  double p[8][3], g[8][3];
+  corners_of(P, p);
+  const double e = optimize_detail::hex_energy_of(p, eps, G ? g : nullptr);
+  if (G) matrix_of(g, *G);
   return e;
 }
 
-/// Soft-minimum scaled Jacobian of the hex with corners P (8 by 3) over its 9 Jacobians,
-/// m = s_min - log(Σ_t exp(-β (s_t - s_min))) / β (<= the hex's scaled Jacobian, within log(9) / β),
-/// and, if G, its gradient with respect to P. s_t = det J_t / (|c0| |c1| |c2|), c the columns of J_t;
-/// a Jacobian with a zero column gives s_t = 0 and no gradient.
+/// Soft-minimum scaled Jacobian of the hex with corners P (8 by 3) over its 9 Jacobians and, if G, its
+/// gradient with respect to P (optimize_detail::hex_soft_sj_of).
 double hex_soft_sj(const Mat83& P, Mat83* G) {
-  constexpr double beta = 40.0;
-  std::array<double, 9> s;
-  std::array<Eigen::Matrix3d, 9> ds;
-  double smin = std::numeric_limits<double>::infinity();
-  for (size_t t = 0; t < 9; ++t) {
-    const Eigen::Matrix3d J = jacobian(P, t);
-    const double l0 = J.col(0).norm(), l1 = J.col(1).norm(), l2 = J.col(2).norm();
-    const double L = l0 * l1 * l2;
-    if (!(L > 0)) {
-      s[t] = 0;
-      ds[t].setZero();
-    } else {
-      const Vec3 x01 = J.col(0).cross(J.col(1)), x12 = J.col(1).cross(J.col(2)), x20 = J.col(2).cross(J.col(0));
-      s[t] = J.col(0).dot(x12) / L;
-      ds[t].col(0) = x12 / L - s[t] * J.col(0) / (l0 * l0);
-      ds[t].col(1) = x20 / L - s[t] * J.col(1) / (l1 * l1);
-      ds[t].col(2) = x01 / L - s[t] * J.col(2) / (l2 * l2);
-    }
-    smin = std::min(smin, s[t]);
-  }
-  double sum = 0;
-  std::array<double, 9> w;
-  for (size_t t = 0; t < 9; ++t) sum += (w[t] = std::exp(-beta * (s[t] - smin)));
-  if (G) {
-    G->setZero();
-    for (size_t t = 0; t < 9; ++t) scatter(*G, t, (w[t] / sum) * ds[t]);
-  }
-  return smin - std::log(sum) / beta;
+  double p[8][3], g[8][3];
+  corners_of(P, p);
+  const double s = optimize_detail::hex_soft_sj_of(p, G ? g : nullptr);
+  if (G) matrix_of(g, *G);
+  return s;
 }
 
 /// The free vertices near the inverted hexes and the data of one global descent.
@@ -310,9 +262,15 @@ class GlobalUntangler {
   double min_det() const {
     std::vector<double> m(active_.size(), std::numeric_limits<double>::infinity());
     tbb::parallel_for(size_t(0), active_.size(), [&](size_t a) {
-      Mat83 P;
-      for (int k = 0; k < 8; ++k) P.row(k) = V_.row(H_(active_[a], k)) / scale_[a];
-      for (size_t t = 0; t < 9; ++t) m[a] = std::min(m[a], jacobian(P, t).determinant());
+      double P[8][3], J[3][3];
+      for (int k = 0; k < 8; ++k)
+        for (int i = 0; i < 3; ++i) P[k][i] = V_(H_(active_[a], k), i) / scale_[a];
+      for (int t = 0; t < 9; ++t) {
+        optimize_detail::hex_jacobian_of(P, t, J);
+        m[a] = std::min(
+            m[a], Eigen::Matrix3d{{J[0][0], J[0][1], J[0][2]}, {J[1][0], J[1][1], J[1][2]}, {J[2][0], J[2][1], J[2][2]}}
+                      .determinant());
+      }
     });
     return *std::min_element(m.begin(), m.end());
   }
@@ -320,25 +278,10 @@ class GlobalUntangler {
   /// Energy at x (displacements of the free vertices) and, if g, its gradient.
   double energy(const VecX& x, double eps, VecX* g) {
     apply(x);
-    tbb::parallel_for(size_t(0), active_.size(), [&](size_t a) {
-      Mat83 P;
-      for (int k = 0; k < 8; ++k) P.row(k) = V_.row(H_(active_[a], k)) / scale_[a];
-      Mat83 G;
-      if (average_) {  // raise_average: -soft SJ, the floor's penalty, the Winslow barrier
-        constexpr double kFloorPenalty = 1e3;
-        const double sj = hex_soft_sj(P, g ? &G : nullptr);
-        const double below = std::max(floor_ - sj, 0.0);
-        hex_energy_[a] = -sj + kFloorPenalty * below * below;
-        if (g) G *= -(1.0 + 2.0 * kFloorPenalty * below);
-        if (quality_barrier_ > 0) {
-          Mat83 Gb;
-          hex_energy_[a] += quality_barrier_ * hex_energy(P, eps, g ? &Gb : nullptr);
-          if (g) G += quality_barrier_ * Gb;
-        }
-      } else {
-        hex_energy_[a] = hex_energy(P, eps, g ? &G : nullptr);
-      }
-      if (g) hex_grad_[a] = G / scale_[a];
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, active_.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+      size_t a = r.begin();
+      for (; a + kLanes <= r.end(); a += kLanes) terms_of<Lanes>(a, eps, g != nullptr);
+      for (; a < r.end(); ++a) terms_of<double>(a, eps, g != nullptr);
     });
     double e = 0;
     for (double he : hex_energy_) e += he;
@@ -354,6 +297,47 @@ class GlobalUntangler {
       });
     }
     return e;
+  }
+
+  /// The energy terms of active hexes [a, a + W) into hex_energy_ and, if grad, their gradients into
+  /// hex_grad_: W = kLanes hexes side by side for Lanes, one for double (the same bits either way).
+  template <class V>
+  void terms_of(size_t a, double eps, bool grad) {
+    constexpr int W = std::is_same_v<V, double> ? 1 : kLanes;
+    V P[8][3], G[8][3];
+    for (int l = 0; l < W; ++l) {
+      const Eigen::Index h = active_[a + size_t(l)];
+      for (int k = 0; k < 8; ++k)
+        for (int i = 0; i < 3; ++i) lane(P[k][i], l) = V_(H_(h, k), i) / scale_[a + size_t(l)];
+    }
+    V e;
+    if (average_) {  // raise_average: -soft SJ, the floor's penalty, the Winslow barrier
+      constexpr double kFloorPenalty = 1e3;
+      const V sj = optimize_detail::hex_soft_sj_of(P, grad ? G : nullptr);
+      const V gap = floor_ - sj;
+      const V below = optimize_detail::lane_select(gap < 0.0, V{}, gap);  // std::max(gap, 0.0)
+      e = -sj + kFloorPenalty * below * below;
+      if (grad) {
+        const V f = -(1.0 + 2.0 * kFloorPenalty * below);
+        for (int k = 0; k < 8; ++k)
+          for (int i = 0; i < 3; ++i) G[k][i] *= f;
+      }
+      if (quality_barrier_ > 0) {
+        V Gb[8][3];
+        e += quality_barrier_ * optimize_detail::hex_energy_of(P, eps, grad ? Gb : nullptr);
+        if (grad)
+          for (int k = 0; k < 8; ++k)
+            for (int i = 0; i < 3; ++i) G[k][i] += quality_barrier_ * Gb[k][i];
+      }
+    } else {
+      e = optimize_detail::hex_energy_of(P, eps, grad ? G : nullptr);
+    }
+    for (int l = 0; l < W; ++l) {
+      hex_energy_[a + size_t(l)] = lane(e, l);
+      if (grad)
+        for (int k = 0; k < 8; ++k)
+          for (int i = 0; i < 3; ++i) hex_grad_[a + size_t(l)](k, i) = lane(G[k][i], l) / scale_[a + size_t(l)];
+    }
   }
 
   /// True if the mesh at x, its surface vertices projected, has no inverted active hex (V_ is left at x).

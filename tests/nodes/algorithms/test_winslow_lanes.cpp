@@ -40,18 +40,26 @@ constexpr bool kEigenOrders = false;
 
 }  // namespace
 
-TEST_CASE("libm_cbrt of Lanes: libm_cbrt's bits lane by lane, special values included", "[winslow][cube-root]") {
-  std::mt19937_64 rng(5);
+/// Lanes of random doubles over the whole range (normal and subnormal, both signs) through `lanes` and each
+/// lane through `one`: how many lanes differ in a bit.
+template <class F, class G>
+long lane_differences(unsigned seed, F lanes, G one) {
+  std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> mant(-1.0, 1.0);
   std::uniform_int_distribution<int> expo(-1070, 1020);
   long differ = 0;
   for (int n = 0; n < 250000; ++n) {
     Lanes x;
     for (int l = 0; l < kLanes; ++l) x[l] = std::ldexp(mant(rng), expo(rng));
-    const Lanes y = libm_cbrt(x);
-    for (int l = 0; l < kLanes; ++l) differ += !same_bits(y[l], libm_cbrt(double(x[l])));
+    const Lanes y = lanes(x);
+    for (int l = 0; l < kLanes; ++l) differ += !same_bits(y[l], one(double(x[l])));
   }
-  CHECK(differ == 0);
+  return differ;
+}
+
+TEST_CASE("libm_cbrt of Lanes: libm_cbrt's bits lane by lane, special values included", "[winslow][cube-root]") {
+  CHECK(lane_differences(
+            5, [](Lanes x) { return libm_cbrt(x); }, [](double x) { return libm_cbrt(x); }) == 0);
   const double inf = std::numeric_limits<double>::infinity();
   const Lanes special = {0.0, -std::numeric_limits<double>::denorm_min(), -inf, 27.0};
   const Lanes y = libm_cbrt(special);
@@ -60,6 +68,17 @@ TEST_CASE("libm_cbrt of Lanes: libm_cbrt's bits lane by lane, special values inc
   CHECK(y[2] == -inf);
   CHECK(same_bits(y[3], libm_cbrt(27.0)));  // not std::cbrt(27.0): the compiler folds that, correctly rounded
   CHECK(std::isnan(libm_cbrt(Lanes{std::nan(""), 1, 1, 1})[0]));
+}
+
+TEST_CASE("fast_cbrt of Lanes: fast_cbrt's bits lane by lane, special values included", "[winslow][cube-root]") {
+  CHECK(lane_differences(
+            7, [](Lanes x) { return fast_cbrt(x); }, [](double x) { return fast_cbrt(x); }) == 0);
+  const double inf = std::numeric_limits<double>::infinity();
+  const Lanes y = fast_cbrt(Lanes{0.0, -8.0, inf, 27.0});
+  CHECK(same_bits(y[0], 0.0));
+  CHECK(same_bits(y[1], fast_cbrt(-8.0)));
+  CHECK(y[2] == inf);
+  CHECK(y[3] == Approx(3.0).epsilon(1e-15));
 }
 
 TEST_CASE("winslow_term and the map's tet term: the same bits for double, for Lanes and as Eigen expressions",
