@@ -136,6 +136,10 @@ inline Lanes fast_cbrt(Lanes x) {
   return y;
 }
 
+/// mask ? a : b, lane by lane for Lanes (mask a lane comparison's result).
+inline double lane_select(bool mask, double a, double b) { return mask ? a : b; }
+inline Lanes lane_select(decltype(Lanes{} < Lanes{}) mask, Lanes a, Lanes b) { return mask ? a : b; }
+
 /// How winslow_term takes the cube root: the PolyCube map's untangling keeps libm's bits (libm_cbrt; its
 /// output feeds every later stage, which a last-bit change would perturb); the hex optimizer takes fast_cbrt.
 enum class CubeRoot { exact, fast };
@@ -144,6 +148,43 @@ inline double lane_sqrt(double x) { return std::sqrt(x); }
 inline Lanes lane_sqrt(Lanes x) {
   for (int l = 0; l < kLanes; ++l) x[l] = std::sqrt(x[l]);
   return x;
+}
+
+/// x · y of 3-vectors in Eigen 3.4's order for a Vector3d dot product or squared norm: (x0 y0 + x1 y1) + x2 y2.
+template <class V>
+inline V dot3(const V (&x)[3], const V (&y)[3]) {
+  return (x[0] * y[0] + x[1] * y[1]) + x[2] * y[2];
+}
+
+/// r = x × y, Eigen's formula for Vector3d::cross.
+template <class V>
+inline void cross3(const V (&x)[3], const V (&y)[3], V (&r)[3]) {
+  r[0] = x[1] * y[2] - x[2] * y[1];
+  r[1] = x[2] * y[0] - x[0] * y[2];
+  r[2] = x[0] * y[1] - x[1] * y[0];
+}
+
+/// det[a b c] / (|a| |b| |c|) of three vectors (a[i] their coordinates), 0 when one has (almost) no
+/// length, clamped to [-1, 1]: the scaled Jacobian of a corner frame or of the centre axes (hex_quality.h),
+/// for double or Lanes. One square root of the product of the squared lengths instead of three (the
+/// optimizer evaluates this nine times per hex per trial move); the product of the norms where that
+/// product would under- or overflow. The operations are those of the Eigen Vector3d expressions it
+/// replaced, in their order (a dot or squared norm (x0 y0 + x1 y1) + x2 y2, Eigen's cross product):
+/// tests/nodes/quality/test_quality.cpp compares the bits.
+template <class V>
+inline V scaled_of(const V (&a)[3], const V (&b)[3], const V (&c)[3]) {
+  V bc[3];
+  cross3(b, c, bc);
+  const V det = dot3(a, bc);
+  const V na = dot3(a, a), nb = dot3(b, b), nc = dot3(c, c);
+  const V len2 = na * nb * nc;
+  V len;
+  if constexpr (std::is_same_v<V, double>)
+    len = len2 > 1e-290 && len2 < 1e290 ? std::sqrt(len2) : std::sqrt(na) * std::sqrt(nb) * std::sqrt(nc);
+  else
+    len = lane_select((len2 > 1e-290) & (len2 < 1e290), lane_sqrt(len2), lane_sqrt(na) * lane_sqrt(nb) * lane_sqrt(nc));
+  const V s = lane_select(len > 1e-300, det / len, V{});
+  return lane_select(s < -1.0, V{} - 1.0, lane_select(1.0 < s, V{} + 1.0, s));  // std::clamp(s, -1, 1)
 }
 
 /// winslow_term (below) on J[row][col], for double or Lanes. Its operations

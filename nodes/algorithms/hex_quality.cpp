@@ -1,5 +1,6 @@
 #include "nodes/algorithms/hex_quality.h"
 
+#include "nodes/algorithms/hex_corners.h"
 #include "nodes/algorithms/triangle_tree.h"
 #include "nodes/artefacts/hex_topology.h"
 #include "runtime/errors.h"
@@ -28,15 +29,13 @@ using hex_topology::kFaces;
 // The 5-tet split of a hex used for its volume.
 constexpr int kVolumeTets[5][4] = {{0, 1, 3, 4}, {1, 2, 3, 6}, {1, 3, 4, 6}, {1, 4, 5, 6}, {3, 4, 6, 7}};
 
-// det[a b c] / (|a| |b| |c|), 0 when a vector has (almost) no length, clamped to [-1, 1].
+using optimize_detail::kLanes;
+using optimize_detail::Lanes;
+
+// det[a b c] / (|a| |b| |c|), 0 when a vector has (almost) no length, clamped to [-1, 1] (scaled_of).
 double scaled(const Vec3& a, const Vec3& b, const Vec3& c) {
-  const double det = a.dot(b.cross(c));
-  // One square root of the product of the squared lengths instead of three (the optimizer evaluates this
-  // nine times per hex per trial move); the product of the norms where that product would under- or overflow.
-  const double len2 = a.squaredNorm() * b.squaredNorm() * c.squaredNorm();
-  const double len = len2 > 1e-290 && len2 < 1e290 ? std::sqrt(len2) : a.norm() * b.norm() * c.norm();
-  const double s = len > 1e-300 ? det / len : 0.0;
-  return std::clamp(s, -1.0, 1.0);
+  const double x[3] = {a[0], a[1], a[2]}, y[3] = {b[0], b[1], b[2]}, z[3] = {c[0], c[1], c[2]};
+  return optimize_detail::scaled_of(x, y, z);
 }
 
 std::array<Vec3, 8> corners(const HexMesh& m, Eigen::Index h) {
@@ -250,9 +249,16 @@ RowMatrixX3i quads_to_triangles(const RowMatrixX4iQ& q) {
   return t;
 }
 
-double corner_term(const std::array<Eigen::Vector3d, 8>& p, size_t k) {
-  const auto& c = kCorners[k];
-  return scaled(p[c[1]] - p[c[0]], p[c[2]] - p[c[0]], p[c[3]] - p[c[0]]);
+/// The scaled Jacobians of the kLanes corners ks of hex p into terms[ks[l]], side by side in lanes.
+void corner_terms(const std::array<Eigen::Vector3d, 8>& p, const int* ks, std::array<double, 9>& terms) {
+  Lanes e[3][3];  // e[m][i]: coordinate i of the frame's edge m
+  for (int l = 0; l < kLanes; ++l) {
+    const auto& c = kCorners[ks[l]];
+    for (int m = 0; m < 3; ++m)
+      for (int i = 0; i < 3; ++i) e[m][i][l] = p[size_t(c[m + 1])][i] - p[size_t(c[0])][i];
+  }
+  const Lanes s = optimize_detail::scaled_of(e[0], e[1], e[2]);
+  for (int l = 0; l < kLanes; ++l) terms[size_t(ks[l])] = s[l];
 }
 
 /// The centre term and the minima, from terms[0..7].
@@ -269,14 +275,19 @@ HexSJ finish_terms(const std::array<Eigen::Vector3d, 8>& p, std::array<double, 9
 
 }  // namespace
 
+static_assert(optimize_detail::kLanes == 4, "a hex's corners go four to a Lanes");
+
 HexSJ hex_scaled_jacobian(const std::array<Eigen::Vector3d, 8>& p, std::array<double, 9>& terms) {
-  for (size_t k = 0; k < 8; ++k) terms[k] = corner_term(p, k);
+  static constexpr int kAll[8] = {0, 1, 2, 3, 4, 5, 6, 7};
+  corner_terms(p, kAll, terms);
+  corner_terms(p, kAll + 4, terms);
   return finish_terms(p, terms);
 }
 
 HexSJ hex_scaled_jacobian_moved(const std::array<Eigen::Vector3d, 8>& p, int j, const std::array<double, 9>& before,
                                 std::array<double, 9>& terms) {
-  for (size_t k = 0; k < 8; ++k) terms[k] = hex_topology::corner_uses(int(k), j) ? corner_term(p, k) : before[k];
+  terms = before;
+  corner_terms(p, kCorners[j], terms);  // the corners whose frames use corner j: j and its 3 neighbours
   return finish_terms(p, terms);
 }
 

@@ -15,10 +15,6 @@
 
 namespace polyhex::optimize_detail {
 
-/// mask ? a : b, lane by lane for Lanes (mask a lane comparison's result).
-inline double lane_select(bool mask, double a, double b) { return mask ? a : b; }
-inline Lanes lane_select(decltype(Lanes{} < Lanes{}) mask, Lanes a, Lanes b) { return mask ? a : b; }
-
 /// The centre principal axes (Verdict): X1 = (p1-p0)+(p2-p3)+(p5-p4)+(p6-p7), X2 = (p3-p0)+(p2-p1)+(p7-p4)+(p6-p5),
 /// X3 = (p4-p0)+(p5-p1)+(p6-p2)+(p7-p3), each over 4.
 inline constexpr int kCentreAxis[3][4][2] = {
@@ -85,12 +81,6 @@ inline V hex_energy_of(const V (&P)[8][3], double eps, std::common_type_t<V> (*G
 template <class V>
 inline V hex_soft_sj_of(const V (&P)[8][3], std::common_type_t<V> (*G)[3]) {
   constexpr double beta = 40.0;
-  auto dot = [](const V(&a)[3], const V(&b)[3]) { return (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2]; };
-  auto cross = [](const V(&a)[3], const V(&b)[3], V(&r)[3]) {
-    r[0] = a[1] * b[2] - a[2] * b[1];
-    r[1] = a[2] * b[0] - a[0] * b[2];
-    r[2] = a[0] * b[1] - a[1] * b[0];
-  };
   V s[9], ds[9][3][3];
   V smin = V{} + std::numeric_limits<double>::infinity();
   for (int t = 0; t < 9; ++t) {
@@ -98,13 +88,13 @@ inline V hex_soft_sj_of(const V (&P)[8][3], std::common_type_t<V> (*G)[3]) {
     hex_jacobian_of(P, t, J);
     const V c[3][3] = {{J[0][0], J[1][0], J[2][0]}, {J[0][1], J[1][1], J[2][1]}, {J[0][2], J[1][2], J[2][2]}};
     V len[3];
-    for (int k = 0; k < 3; ++k) len[k] = lane_sqrt(dot(c[k], c[k]));
+    for (int k = 0; k < 3; ++k) len[k] = lane_sqrt(dot3(c[k], c[k]));
     const V L = len[0] * len[1] * len[2];
     V x[3][3];  // d det / d column k: the cross product of the next two columns
-    cross(c[1], c[2], x[0]);
-    cross(c[2], c[0], x[1]);
-    cross(c[0], c[1], x[2]);
-    const V st = dot(c[0], x[0]) / L;
+    cross3(c[1], c[2], x[0]);
+    cross3(c[2], c[0], x[1]);
+    cross3(c[0], c[1], x[2]);
+    const V st = dot3(c[0], x[0]) / L;
     const auto good = L > 0.0;  // a bool, or a lane mask
     s[t] = lane_select(good, st, V{});
     if (G)

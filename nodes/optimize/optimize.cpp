@@ -43,7 +43,6 @@ struct PhaseTimer {
 
 using optimize_detail::chi;
 using optimize_detail::kCorners;
-using optimize_detail::winslow_term;
 
 /// Normalised corner determinants of a hex (edge vectors over `scale`).
 double min_corner_det(const std::array<Vec3, 8>& p, double scale) {
@@ -1051,13 +1050,25 @@ void summarise(const HexMesh& m, double& sj_min, double& sj_avg, long& inverted)
 
 namespace {
 
-double winslow_corner(const std::array<Eigen::Vector3d, 8>& p, size_t k, double scale, double eps) {
-  const auto& c = kCorners[k];
-  Eigen::Matrix3d J;
-  J.col(0) = (p[size_t(c[1])] - p[size_t(c[0])]) / scale;
-  J.col(1) = (p[size_t(c[2])] - p[size_t(c[0])]) / scale;
-  J.col(2) = (p[size_t(c[3])] - p[size_t(c[0])]) / scale;
-  return winslow_term(J, eps, nullptr, optimize_detail::CubeRoot::fast);
+/// The Winslow terms (fast cube root) of the kLanes corners ks of hex p, its edges over `scale`, into
+/// terms[ks[l]], side by side in lanes.
+void winslow_corners(const std::array<Eigen::Vector3d, 8>& p, const int* ks, double scale, double eps,
+                     std::array<double, 8>& terms) {
+  using optimize_detail::Lanes;
+  Lanes J[3][3];
+  for (int l = 0; l < optimize_detail::kLanes; ++l) {
+    const auto& c = kCorners[ks[l]];
+    for (int col = 0; col < 3; ++col)
+      for (int i = 0; i < 3; ++i) J[i][col][l] = (p[size_t(c[col + 1])][i] - p[size_t(c[0])][i]) / scale;
+  }
+  const Lanes e = optimize_detail::winslow_term_of(J, eps, nullptr, optimize_detail::CubeRoot::fast);
+  for (int l = 0; l < optimize_detail::kLanes; ++l) terms[size_t(ks[l])] = e[l];
+}
+
+double sum_of(const std::array<double, 8>& terms) {
+  double e = 0;
+  for (double t : terms) e += t;
+  return e;
 }
 
 }  // namespace
@@ -1069,17 +1080,18 @@ double hex_winslow_energy(const std::array<Eigen::Vector3d, 8>& p, double scale,
 
 double hex_winslow_energy(const std::array<Eigen::Vector3d, 8>& p, double scale, double eps,
                           std::array<double, 8>& terms) {
-  double e = 0;
-  for (size_t k = 0; k < 8; ++k) e += terms[k] = winslow_corner(p, k, scale, eps);
-  return e;
+  static_assert(optimize_detail::kLanes == 4, "a hex's corners go four to a Lanes");
+  static constexpr int kAll[8] = {0, 1, 2, 3, 4, 5, 6, 7};
+  winslow_corners(p, kAll, scale, eps, terms);
+  winslow_corners(p, kAll + 4, scale, eps, terms);
+  return sum_of(terms);
 }
 
 double hex_winslow_energy_moved(const std::array<Eigen::Vector3d, 8>& p, int j, double scale, double eps,
                                 const std::array<double, 8>& before, std::array<double, 8>& terms) {
-  double e = 0;
-  for (size_t k = 0; k < 8; ++k)
-    e += terms[k] = hex_topology::corner_uses(int(k), j) ? winslow_corner(p, k, scale, eps) : before[k];
-  return e;
+  terms = before;
+  winslow_corners(p, kCorners[j], scale, eps, terms);  // the corners whose frames use corner j
+  return sum_of(terms);
 }
 
 HexMesh optimize_hexes(const HexMesh& mesh, const SurfaceMesh& surface, const OptimizeParams& p, OptimizeStats* stats) {

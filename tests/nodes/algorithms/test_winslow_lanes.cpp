@@ -3,6 +3,7 @@
 // untangle_map.cpp computed it with Eigen before (the meshes depend on them: a last-bit change moves every
 // map and mesh downstream).
 #include "nodes/algorithms/hex_corners.h"
+#include "tests/helpers/eigen_orders.h"
 
 #include <catch2/catch.hpp>
 
@@ -30,13 +31,7 @@ double eigen_tet_term(const Mat3& D, const Mat3& R, double w, double eps, Mat43&
   return e;
 }
 
-// Eigen's summation orders are those of its SSE2 packets; with wider packets or fused multiply-adds the
-// Eigen expressions round otherwise.
-#if defined(__x86_64__) && !defined(__AVX__) && !defined(__FMA__)
-constexpr bool kEigenOrders = true;
-#else
-constexpr bool kEigenOrders = false;
-#endif
+using polyhex::test::kEigenOrders;
 
 }  // namespace
 

@@ -3,6 +3,7 @@
 // expressions untangle_global.cpp computed them with before (6c8d84e, kept here as the reference: the
 // optimizer's meshes depend on every last bit).
 #include "nodes/optimize/hex_terms.h"
+#include "tests/helpers/eigen_orders.h"
 
 #include <catch2/catch.hpp>
 
@@ -90,13 +91,7 @@ double ref_hex_soft_sj(const Mat83& P, Mat83* G) {
   return smin - std::log(sum) / beta;
 }
 
-// Eigen's summation orders are those of its SSE2 packets; with wider packets or fused multiply-adds the
-// Eigen expressions round otherwise.
-#if defined(__x86_64__) && !defined(__AVX__) && !defined(__FMA__)
-constexpr bool kEigenOrders = true;
-#else
-constexpr bool kEigenOrders = false;
-#endif
+using polyhex::test::kEigenOrders;
 
 /// A hex of the kinds the optimizer sees: a unit cube's corners moved a little (most), a lot (folded,
 /// inverted corners), with an edge collapsed (a zero column: s_t = 0), or a whole hex flat.

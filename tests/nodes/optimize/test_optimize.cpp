@@ -1,14 +1,17 @@
 // Hex optimization (§6): max-min SJ never lowers the minimum, untangling, boundary on the surface.
 #include "graph/node.h"
+#include "nodes/algorithms/hex_corners.h"
 #include "nodes/algorithms/hex_quality.h"
 #include "nodes/algorithms/triangle_tree.h"
 #include "nodes/optimize/optimize.h"
+#include "tests/helpers/eigen_orders.h"
 #include "tests/helpers/voxel_maps.h"
 
 #include <catch2/catch.hpp>
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <cstring>
 #include <random>
 
 using namespace polyhex;
@@ -52,6 +55,37 @@ TEST_CASE("the Winslow energy of a cube is 8 at any scale and grows with distort
   CHECK(hex_winslow_energy(p, 1.0, 1e-9) == Approx(8.0).epsilon(1e-6));
   p[6] += Eigen::Vector3d(0.5, 0.3, -0.2);
   CHECK(hex_winslow_energy(p, 2.0, 1e-9) > 8.01);
+}
+
+TEST_CASE("optimize: the 8 corner Winslow terms, four at a time in lanes, have the Eigen expressions' bits",
+          "[optimize]") {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> jitter(-0.6, 0.6);
+  long differ = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    std::array<Eigen::Vector3d, 8> p;
+    for (int k = 0; k < 8; ++k)
+      p[size_t(k)] =
+          Eigen::Vector3d(k == 1 || k == 2 || k == 5 || k == 6, k == 2 || k == 3 || k == 6 || k == 7, k >= 4) +
+          Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng));
+    const double scale = 0.3 + 0.0001 * trial, eps = trial % 3 ? 1e-10 : 0.2;
+    std::array<double, 8> terms;
+    const double e = hex_winslow_energy(p, scale, eps, terms);
+    double sum = 0;
+    for (size_t k = 0; k < 8; ++k) {  // optimize.cpp's winslow_corner as of 6c8d84e
+      const auto& c = hex_topology::kCorners[k];
+      Eigen::Matrix3d J;
+      for (int col = 0; col < 3; ++col) J.col(col) = (p[size_t(c[size_t(col) + 1])] - p[size_t(c[0])]) / scale;
+      const double ref = optimize_detail::winslow_term(J, eps, nullptr, optimize_detail::CubeRoot::fast);
+      differ += std::memcmp(&ref, &terms[k], sizeof ref) != 0;
+      sum += ref;
+    }
+    differ += std::memcmp(&sum, &e, sizeof e) != 0;
+  }
+  if (test::kEigenOrders)
+    CHECK(differ == 0);
+  else
+    WARN("not an SSE2-only x86-64 build: Eigen's summation orders differ, their bits not compared");
 }
 
 TEST_CASE("optimize: the Winslow energy after one corner moved equals the full evaluation bit for bit", "[optimize]") {

@@ -3,6 +3,7 @@
 #include "nodes/algorithms/triangle_tree.h"
 #include "nodes/artefacts/hex_topology.h"
 #include "nodes/quality/quality_json.h"
+#include "tests/helpers/eigen_orders.h"
 #include "tests/helpers/hex_fixtures.h"
 
 #include <catch2/catch.hpp>
@@ -10,6 +11,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <random>
 #include <set>
@@ -147,6 +149,58 @@ TEST_CASE("quality: the centre term counts when it is the minimum", "[quality]")
   CHECK(q.sj_corner_min == s.corner_min);
   CHECK(q.sj_below_0_2 == 1);
   CHECK(q.inverted == 0);
+}
+
+namespace {
+
+/// hex_quality.cpp's scaled Jacobian of three vectors as Eigen expressions (as of 6c8d84e): the reference
+/// for scaled_of's bits.
+double eigen_scaled(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  const double det = a.dot(b.cross(c));
+  const double len2 = a.squaredNorm() * b.squaredNorm() * c.squaredNorm();
+  const double len = len2 > 1e-290 && len2 < 1e290 ? std::sqrt(len2) : a.norm() * b.norm() * c.norm();
+  const double s = len > 1e-300 ? det / len : 0.0;
+  return std::clamp(s, -1.0, 1.0);
+}
+
+}  // namespace
+
+TEST_CASE("quality: the 9 scaled Jacobian terms, four corners at a time in lanes, have the Eigen expressions' bits",
+          "[quality]") {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> jitter(-0.6, 0.6);
+  const RowMatrixX3d P = cube_corners();
+  long differ = 0, clamped_or_zero = 0, inverted = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    // moved, folded, collapsed (a zero edge), and scaled to where the squared lengths' product under- or
+    // overflows (the product of the norms then)
+    const double scale = trial % 5 == 3 ? 1e-120 : trial % 5 == 4 ? 1e100 : 1.0;
+    std::array<Eigen::Vector3d, 8> p;
+    for (int k = 0; k < 8; ++k)
+      p[size_t(k)] = scale * (P.row(k).transpose() + Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng)));
+    if (trial % 7 == 0) p[1] = p[0];
+    std::array<double, 9> terms;
+    hex_scaled_jacobian(p, terms);
+    for (size_t k = 0; k < 8; ++k) {
+      const auto& c = hex_topology::kCorners[k];
+      const double ref = eigen_scaled(p[size_t(c[1])] - p[size_t(c[0])], p[size_t(c[2])] - p[size_t(c[0])],
+                                      p[size_t(c[3])] - p[size_t(c[0])]);
+      differ += std::memcmp(&ref, &terms[k], sizeof ref) != 0;
+      clamped_or_zero += ref == 0.0 || std::abs(ref) == 1.0;
+      inverted += ref < 0;
+    }
+    const Eigen::Vector3d xi = (p[1] + p[2] + p[5] + p[6]) - (p[0] + p[3] + p[4] + p[7]);
+    const Eigen::Vector3d eta = (p[2] + p[3] + p[6] + p[7]) - (p[0] + p[1] + p[4] + p[5]);
+    const Eigen::Vector3d zeta = (p[4] + p[5] + p[6] + p[7]) - (p[0] + p[1] + p[2] + p[3]);
+    const double ref = eigen_scaled(xi, eta, zeta);
+    differ += std::memcmp(&ref, &terms[8], sizeof ref) != 0;
+  }
+  CHECK(clamped_or_zero > 1000);
+  CHECK(inverted > 1000);
+  if (test::kEigenOrders)
+    CHECK(differ == 0);
+  else
+    WARN("not an SSE2-only x86-64 build: Eigen's summation orders differ, their bits not compared");
 }
 
 TEST_CASE("quality: the scaled Jacobian after one corner moved equals the full evaluation bit for bit", "[quality]") {
