@@ -16,6 +16,10 @@
 #include <limits>
 #include <type_traits>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace polyhex::optimize_detail {
 
 /// Corner c and its three edge neighbours, ordered so that the determinant is positive for a valid hex.
@@ -144,9 +148,20 @@ inline Lanes lane_select(decltype(Lanes{} < Lanes{}) mask, Lanes a, Lanes b) { r
 /// output feeds every later stage, which a last-bit change would perturb); the hex optimizer takes fast_cbrt.
 enum class CubeRoot { exact, fast };
 
+/// The square root, lane by lane for Lanes: IEEE's correctly rounded one either way (on x86-64 two SSE2
+/// sqrtpd, without the scalar std::sqrt's check and call for a negative argument, which dominated the
+/// sweeps' corner terms: 16 such square roots per four corners).
 inline double lane_sqrt(double x) { return std::sqrt(x); }
 inline Lanes lane_sqrt(Lanes x) {
+#if defined(__SSE2__)
+  __m128d half[2];
+  std::memcpy(half, &x, sizeof x);
+  half[0] = _mm_sqrt_pd(half[0]);
+  half[1] = _mm_sqrt_pd(half[1]);
+  std::memcpy(&x, half, sizeof x);
+#else
   for (int l = 0; l < kLanes; ++l) x[l] = std::sqrt(x[l]);
+#endif
   return x;
 }
 
@@ -181,8 +196,11 @@ inline V scaled_of(const V (&a)[3], const V (&b)[3], const V (&c)[3]) {
   V len;
   if constexpr (std::is_same_v<V, double>)
     len = len2 > 1e-290 && len2 < 1e290 ? std::sqrt(len2) : std::sqrt(na) * std::sqrt(nb) * std::sqrt(nc);
-  else
-    len = lane_select((len2 > 1e-290) & (len2 < 1e290), lane_sqrt(len2), lane_sqrt(na) * lane_sqrt(nb) * lane_sqrt(nc));
+  else {
+    len = lane_sqrt(len2);
+    for (int l = 0; l < kLanes; ++l)  // rare: the product of the norms where len2 under- or overflows
+      if (!(len2[l] > 1e-290 && len2[l] < 1e290)) len[l] = std::sqrt(na[l]) * std::sqrt(nb[l]) * std::sqrt(nc[l]);
+  }
   const V s = lane_select(len > 1e-300, det / len, V{});
   return lane_select(s < -1.0, V{} - 1.0, lane_select(1.0 < s, V{} + 1.0, s));  // std::clamp(s, -1, 1)
 }
