@@ -2,7 +2,9 @@
 /// @brief Internal to the optimize stage: the corner frames of a VTK_HEXAHEDRON (hex_topology.h) and the regularised
 /// determinant χ of the foldover-free energy (Garanzha et al. 2021), shared by the local sweeps
 /// (optimize.cpp) and the global untangling (untangle_global.cpp), and the regularised Winslow term that the
-/// global untangling and the PolyCube map's untangling (nodes/position_deform/untangle_map.cpp) minimise.
+/// global untangling and the PolyCube map's untangling (nodes/position_deform/untangle_map.cpp) minimise, and
+/// the scaled Jacobian of three vectors (hex_quality.cpp's corner and centre terms). The hot ones are written
+/// for `double` and for `Lanes` (four side by side) with the bits of the Eigen expressions they replaced.
 #pragma once
 
 #include "nodes/artefacts/hex_topology.h"
@@ -216,8 +218,7 @@ inline V winslow_term_of(const V (&J)[3][3], double eps, std::common_type_t<V> (
   const V D = (minor(0, 1, 2) - minor(1, 0, 2)) + minor(2, 0, 1);
   const V r = lane_sqrt(eps * eps + D * D);
   const V c = 0.5 * (D + r);  // chi(D, eps)
-  V c23;
-  c23 = root == CubeRoot::fast ? fast_cbrt(c * c) : libm_cbrt(c * c);
+  const V c23 = root == CubeRoot::fast ? fast_cbrt(c * c) : libm_cbrt(c * c);
   const V n2 = ((J[0][0] * J[0][0] + J[2][0] * J[2][0]) + (J[1][1] * J[1][1] + J[0][2] * J[0][2]) +
                 ((J[1][0] * J[1][0] + J[0][1] * J[0][1]) + (J[2][1] * J[2][1] + J[1][2] * J[1][2]))) +
                J[2][2] * J[2][2];
