@@ -7,13 +7,10 @@
 namespace polyhex::hex_topology {
 
 /// Corner o with its three edge neighbours (b, c, d), ordered so that det[b-o, c-o, d-o] > 0 for a valid hex.
+/// kCorners[j] is also the set of corners whose frames use corner j (edge neighbours are mutual): a move of
+/// corner j alone leaves the other 4 corner frames, and every per-corner figure of them, as they were.
 inline constexpr int kCorners[8][4] = {{0, 1, 3, 4}, {1, 2, 0, 5}, {2, 3, 1, 6}, {3, 0, 2, 7},
                                        {4, 7, 5, 0}, {5, 4, 6, 1}, {6, 5, 7, 2}, {7, 6, 4, 3}};
-/// True if corner k's frame (kCorners[k]) uses corner j: k itself and its 3 edge neighbours. A move of
-/// corner j alone leaves the other 4 corner frames, and every per-corner figure of them, as they were.
-inline constexpr bool corner_uses(int k, int j) {
-  return kCorners[k][0] == j || kCorners[k][1] == j || kCorners[k][2] == j || kCorners[k][3] == j;
-}
 /// The 6 faces, each ordered to face outward for a valid hex.
 inline constexpr int kFaces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
                                      {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};

@@ -173,7 +173,7 @@ double hex_winslow_energy(const std::array<Eigen::Vector3d, 8>& p, double scale,
                           std::array<double, 8>& terms);
 /// The same after only corner j has moved: `before` holds the terms of an evaluation at the same scale and
 /// ε with the other 7 corners where they are now; the 4 corner terms that do not use corner j
-/// (hex_topology::corner_uses) are taken from it. Equal to the full evaluation bit for bit.
+/// (those outside hex_topology::kCorners[j]) are taken from it. Equal to the full evaluation bit for bit.
 /// \pre 0 <= j < 8
 double hex_winslow_energy_moved(const std::array<Eigen::Vector3d, 8>& p, int j, double scale, double eps,
                                 const std::array<double, 8>& before, std::array<double, 8>& terms);
