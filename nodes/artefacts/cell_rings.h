@@ -6,7 +6,6 @@
 
 #include <Eigen/Core>
 
-#include <array>
 #include <utility>
 #include <vector>
 
@@ -36,32 +35,18 @@ std::vector<char> cell_ring_region(const Eigen::MatrixBase<Cells>& C, Eigen::Ind
 }
 
 /// Per free vertex, the (active cell, corner) pairs that use it, in active-cell order: corners[start[i] ..
-/// start[i + 1]) for free vertex i. A descent assembles a free vertex's gradient from its cells' per-corner
-/// gradients: each cell writes the row of each free corner to that pair's slot of a Rows (one 3-vector
-/// per pair, `slots` says where), and sum() adds a vertex's rows in pair order, streaming through memory
-/// instead of reading each cell's gradient at random.
+/// start[i + 1]) for free vertex i.
 struct CellIncidence {
-  using Rows = std::vector<std::array<double, 3>>;
-
   std::vector<int> start;                    ///< #free + 1
   std::vector<std::pair<int, int>> corners;  ///< (index into `active`, corner k)
 
-  /// Per active cell and corner k < K: the index of its pair in `corners`, or -1 (the corner's vertex is
-  /// not free).
-  template <int K>
-  std::vector<std::array<int, K>> slots(size_t active_cells) const {
-    std::array<int, K> none;
-    none.fill(-1);
-    std::vector<std::array<int, K>> r(active_cells, none);
-    for (size_t c = 0; c < corners.size(); ++c) r[size_t(corners[c].first)][size_t(corners[c].second)] = int(c);
-    return r;
-  }
-
-  /// Σ rows[c] over free vertex i's pairs, in their order, from zero.
-  Eigen::Vector3d sum(size_t i, const Rows& rows) const {
+  /// Σ cell_grad[a].row(k) over the (a, k) pairs of free vertex i: the vertex's gradient assembled from
+  /// its cells' per-corner gradients (one k-by-3 matrix per active cell).
+  template <class Grads>
+  Eigen::Vector3d gather(size_t i, const Grads& cell_grad) const {
     Eigen::Vector3d g = Eigen::Vector3d::Zero();
     for (int c = start[i]; c < start[i + 1]; ++c)
-      for (int j = 0; j < 3; ++j) g[j] += rows[size_t(c)][size_t(j)];
+      g += cell_grad[size_t(corners[size_t(c)].first)].row(corners[size_t(c)].second).transpose();
     return g;
   }
 };

@@ -211,8 +211,7 @@ class GlobalUntangler {
     for (size_t i = 0; i < free_.size(); ++i) slot[size_t(free_[i])] = int(i);
     inc_ = cell_incidence(H_, active_, slot, free_.size());
     hex_energy_.assign(active_.size(), 0.0);
-    row_of_ = inc_.slots<8>(active_.size());
-    grad_rows_.assign(inc_.corners.size(), {0.0, 0.0, 0.0});
+    hex_grad_.assign(active_.size(), Mat83::Zero());
   }
 
   /// Base positions and tangent frames of the free vertices (x = 0 is the current mesh).
@@ -289,7 +288,7 @@ class GlobalUntangler {
     if (g) {
       g->setZero(ndof_);
       tbb::parallel_for(size_t(0), free_.size(), [&](size_t i) {
-        const Vec3 gv = inc_.sum(i, grad_rows_);
+        const Vec3 gv = inc_.gather(i, hex_grad_);
         const int v = free_[i], d = dof_[size_t(v)];
         if (on_surface_[size_t(v)])
           g->segment<2>(d) = frame_[i].transpose() * gv;
@@ -300,9 +299,8 @@ class GlobalUntangler {
     return e;
   }
 
-  /// The energy terms of active hexes [a, a + W) into hex_energy_ and, if grad, their gradients with respect
-  /// to their free corners into grad_rows_: W = kLanes hexes side by side for Lanes, one for double (the
-  /// same bits either way).
+  /// The energy terms of active hexes [a, a + W) into hex_energy_ and, if grad, their gradients into
+  /// hex_grad_: W = kLanes hexes side by side for Lanes, one for double (the same bits either way).
   template <class V>
   void terms_of(size_t a, double eps, bool grad) {
     constexpr int W = std::is_same_v<V, double> ? 1 : kLanes;
@@ -338,8 +336,7 @@ class GlobalUntangler {
       hex_energy_[a + size_t(l)] = lane(e, l);
       if (grad)
         for (int k = 0; k < 8; ++k)
-          if (const int c = row_of_[a + size_t(l)][size_t(k)]; c >= 0)
-            for (int i = 0; i < 3; ++i) grad_rows_[size_t(c)][size_t(i)] = lane(G[k][i], l) / scale_[a + size_t(l)];
+          for (int i = 0; i < 3; ++i) hex_grad_[a + size_t(l)](k, i) = lane(G[k][i], l) / scale_[a + size_t(l)];
     }
   }
 
@@ -407,11 +404,10 @@ class GlobalUntangler {
   std::vector<Vec3> base_;
   std::vector<Eigen::Matrix<double, 3, 2>> frame_;
   std::vector<double> hex_energy_;
-  std::vector<std::array<int, 8>> row_of_;  ///< per active hex and corner: its row in grad_rows_, or -1
-  CellIncidence::Rows grad_rows_;           ///< per (active hex, free corner) pair of inc_: d energy / d corner
-  bool average_ = false;                    ///< the energy is raise_average's
-  double quality_barrier_ = 0;              ///< raise_average: the barrier's weight
-  double floor_ = 0;                        ///< raise_average: soft scaled Jacobian under which a hex is penalised
+  std::vector<Mat83> hex_grad_;
+  bool average_ = false;        ///< the energy is raise_average's
+  double quality_barrier_ = 0;  ///< raise_average: the barrier's weight
+  double floor_ = 0;            ///< raise_average: soft scaled Jacobian under which a hex is penalised
 };
 
 }  // namespace

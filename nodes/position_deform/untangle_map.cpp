@@ -29,6 +29,7 @@ namespace {
 
 using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
+using Mat43 = Eigen::Matrix<double, 4, 3>;
 using VecX = Eigen::VectorXd;
 using optimize_detail::kLanes;
 using optimize_detail::lane;
@@ -354,8 +355,7 @@ class MapUntangler {
     mean_edge_ = active_.empty() || edge_sum <= 0 ? 1.0 : edge_sum / (3.0 * double(active_.size()));
     inc_ = cell_incidence(T_, active_, slot_, free_.size());  // by tet index: a fixed order
     tet_energy_.assign(active_.size(), 0.0);
-    row_of_ = inc_.slots<4>(active_.size());
-    grad_rows_.assign(inc_.corners.size(), {0.0, 0.0, 0.0});
+    tet_grad_.assign(active_.size(), Mat43::Zero());
   }
 
   void set_base() {
@@ -413,9 +413,9 @@ class MapUntangler {
     double e = 0;
     for (double te : tet_energy_) e += te;
     if (g) {
-      g->resize(ndof_);  // every entry is written below: each free vertex's moving axes, once
+      g->setZero(ndof_);
       tbb::parallel_for(size_t(0), free_.size(), [&](size_t i) {
-        const Vec3 gv = inc_.sum(i, grad_rows_);
+        const Vec3 gv = inc_.gather(i, tet_grad_);
         const int d = dof_[size_t(free_[i])];
         for (int j = 0; j < 3 && axes_[i][size_t(j)] >= 0; ++j) (*g)[d + j] = gv[axes_[i][size_t(j)]];
       });
@@ -447,8 +447,7 @@ class MapUntangler {
     return !over.load();
   }
 
-  /// The terms of active tets [begin, end) into tet_energy_ and, if grad, their gradients with respect to
-  /// their free corners into grad_rows_ (CellIncidence::slots):
+  /// The terms of active tets [begin, end) into tet_energy_ and, if grad, their gradients into tet_grad_:
   /// kLanes tets at a time, the rest one by one (the same bits either way).
   void terms(size_t begin, size_t end, double eps, bool grad) {
     size_t a = begin;
@@ -477,8 +476,7 @@ class MapUntangler {
       tet_energy_[a + size_t(l)] = lane(e, l);
       if (grad)
         for (int k = 0; k < 4; ++k)
-          if (const int c = row_of_[a + size_t(l)][size_t(k)]; c >= 0)
-            for (int i = 0; i < 3; ++i) grad_rows_[size_t(c)][size_t(i)] = lane(G[k][i], l);
+          for (int i = 0; i < 3; ++i) tet_grad_[a + size_t(l)](k, i) = lane(G[k][i], l);
     }
   }
 
@@ -503,10 +501,9 @@ class MapUntangler {
   CellIncidence inc_;  ///< per free vertex: (active tet, corner) pairs
   std::vector<Vec3> base_;
   std::vector<double> tet_energy_;
-  std::vector<std::array<int, 4>> row_of_;  ///< per active tet and corner: its row in grad_rows_, or -1
-  CellIncidence::Rows grad_rows_;           ///< per (active tet, free corner) pair of inc_: d term / d corner
-  std::vector<int> slot_;                   ///< #V index in free_, -1 for a vertex that does not move
-  std::vector<char> first_region_;          ///< #V: the first round's free vertices (the region polish's region)
+  std::vector<Mat43> tet_grad_;
+  std::vector<int> slot_;           ///< #V index in free_, -1 for a vertex that does not move
+  std::vector<char> first_region_;  ///< #V: the first round's free vertices (the region polish's region)
 };
 
 }  // namespace
