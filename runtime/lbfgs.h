@@ -23,11 +23,6 @@ struct LbfgsOptions {
   double gradient_tol = 0;  ///< stop (Stalled) when max |g_i| <= this
   double first_move = 1;    ///< a steepest-descent step moves no unknown by more than this
   int max_halvings = 40;    ///< the line search gives up (Stalled) after halving the step this many times
-  /// false: every trial of the line search asks f for the gradient too (cheapest when most first trials
-  /// pass). true: trials ask for the energy alone and the accepted one is evaluated again with its gradient:
-  /// cheaper when the line search often halves (a barrier energy). The iterates are the same either way
-  /// when f's value does not depend on whether the gradient is asked for.
-  bool gradient_on_accept = false;
   /// If set: applies M^-1 in place, M a symmetric positive definite approximation of the Hessian; the
   /// two-loop recursion's initial inverse Hessian is then γ M^-1 (γ = s'y / y'M^-1 y of the newest pair)
   /// instead of γ I (Nocedal and Wright, Numerical Optimization, 2nd ed., §7.2).
@@ -42,10 +37,13 @@ enum class LbfgsEnd {
 };
 
 /// Minimises f from x (updated in place). `f(x, g)` returns the energy at x and, when g is not null, writes
-/// its gradient (g has x's size). An energy may take a third argument, `f(x, g, accept_up_to)`: the line
-/// search's trials that do not ask for the gradient pass the largest value they accept (every other call
-/// passes +inf), and f may return +inf as soon as it knows its value is above that: the trial is rejected
-/// either way, so the iterates are those of the value computed to the end. `stop(done, x, after_step)` is
+/// its gradient (g has x's size). Every trial of the line search asks for the gradient: the accepted one
+/// needs it, and an energy that can tell early that a trial fails need not finish it. Such an energy takes
+/// a third argument, `f(x, g, accept_up_to)`: the trials pass the largest value they accept (the first call
+/// passes +inf), and f may return any value above that (+inf) as soon as it knows its value is above it,
+/// leaving g unset: the trial is rejected either way, so the iterates are those of the value computed to
+/// the end. (On the map's polish, whose barrier rejects a third of the trials, this beats trials without the
+/// gradient and the accepted point evaluated again with it: docs/speed.md.) `stop(done, x, after_step)` is
 /// asked before every iteration (after_step false) and after each accepted step (after_step true, done
 /// counting this step), with done = the iterations done; true ends the run. `count` (if not null) is
 /// incremented per iteration. Checks SIGINT/SIGTERM per iteration. \throw Interrupted (runtime/cancel.h)
@@ -108,15 +106,14 @@ LbfgsEnd lbfgs_minimize(Eigen::VectorXd& x, Energy&& f, const LbfgsOptions& o, S
       xn = x + step * d;
       const double accept_up_to = e + 1e-4 * step * slope;
       if constexpr (std::is_invocable_v<Energy&, const VecX&, VecX*, double>)
-        en = o.gradient_on_accept ? f(xn, nullptr, accept_up_to) : f(xn, &gn, kNoBound);
+        en = f(xn, &gn, accept_up_to);
       else
-        en = f(xn, o.gradient_on_accept ? nullptr : &gn);
+        en = f(xn, &gn);
       if (std::isfinite(en) && en <= accept_up_to) {
         ok = true;
         break;
       }
     }
-    if (ok && o.gradient_on_accept) en = full(xn, &gn);
     if (!ok) return LbfgsEnd::Stalled;
     VecX s = xn - x, y = gn - g;
     x = xn;

@@ -88,8 +88,8 @@ class MapUntangler {
       };
       const int iterations = int(std::min<long>(p_.lbfgs_iterations, p_.max_iterations - st_.lbfgs_iterations));
       untangled = lbfgs_minimize(
-                      x, [&](const VecX& y, VecX* g) { return energy(y, eps, g); }, options(iterations), stop,
-                      &st_.lbfgs_iterations) == LbfgsEnd::Stopped &&
+                      x, [&](const VecX& y, VecX* g, double up_to) { return energy(y, eps, g, up_to); },
+                      options(iterations), stop, &st_.lbfgs_iterations) == LbfgsEnd::Stopped &&
                   !st_.time_budget_hit;
       apply(x);
       const long before_round = st_.inverted_after;
@@ -177,11 +177,9 @@ class MapUntangler {
     }
   }
 
-  /// At ε -> 0 the barrier rejects many first trials (on the bench workload 2.25 trials per iteration):
-  /// the trials skip the gradient. With a polish_preconditioner, the stiffness is factored here.
+  /// The polish's options; with a polish_preconditioner, the stiffness is factored here.
   LbfgsOptions polish_options() {
     LbfgsOptions o = options(p_.polish_iterations);
-    o.gradient_on_accept = true;
     if (p_.polish_preconditioner == PolishPreconditioner::none || ndof_ == 0) return o;
     const auto t0 = std::chrono::steady_clock::now();
     if (p_.polish_preconditioner == PolishPreconditioner::cholesky) {
@@ -399,20 +397,20 @@ class MapUntangler {
     return *std::min_element(m.begin(), m.end());
   }
 
-  /// The energy at base + x (the map moved there) and, if g, its gradient. With no gradient asked and a
-  /// finite `accept_up_to` (the line search's trials, runtime/lbfgs.h), +inf as soon as one tet's term is
-  /// above it: the terms are positive, so their sum in any order is at least its largest term.
+  /// The energy at base + x (the map moved there) and, if g, its gradient. With a finite `accept_up_to` (the
+  /// line search's trials, runtime/lbfgs.h), +inf as soon as one tet's term is above it (the terms are
+  /// positive, so their sum in any order is at least its largest term), and no gradient when the sum is.
   double energy(const VecX& x, double eps, VecX* g, double accept_up_to = kNoBound) {
     apply(x);
-    if (!g && accept_up_to < kNoBound) {
-      if (!terms_up_to(eps, accept_up_to)) return kNoBound;
+    if (accept_up_to < kNoBound) {
+      if (!terms_up_to(eps, accept_up_to, g != nullptr)) return kNoBound;
     } else {
       tbb::parallel_for(tbb::blocked_range<size_t>(0, active_.size(), 256),
                         [&](const tbb::blocked_range<size_t>& r) { terms(r.begin(), r.end(), eps, g != nullptr); });
     }
     double e = 0;
     for (double te : tet_energy_) e += te;
-    if (g) {
+    if (g && !(e > accept_up_to)) {  // above the bound: rejected, no gradient needed
       g->setZero(ndof_);
       tbb::parallel_for(size_t(0), free_.size(), [&](size_t i) {
         const Vec3 gv = inc_.gather(i, tet_grad_);
@@ -423,11 +421,11 @@ class MapUntangler {
     return e;
   }
 
-  /// The tets' energy terms into tet_energy_, in blocks taken in index order by every thread: false (and
-  /// the rest left undone) once a term is above `bound` or not a number. On the bench workload the polish
-  /// rejects 270 of its 470 trials, 260 of them with a term above the bound, the first at 27 % of the tets
-  /// on average.
-  bool terms_up_to(double eps, double bound) {
+  /// The tets' energy terms (and, if grad, their gradients) into tet_energy_, in blocks taken in index order
+  /// by every thread: false (and the rest left undone) once a term is above `bound` or not a number. Which
+  /// blocks were done before a `false` varies with the threads; a `true` has done them all. On the bench
+  /// workload 298 of the map's 807 trials are rejected.
+  bool terms_up_to(double eps, double bound, bool grad) {
     constexpr size_t kBlock = 1024;
     const size_t n = active_.size(), blocks = (n + kBlock - 1) / kBlock;
     std::atomic<size_t> next{0};
@@ -438,7 +436,7 @@ class MapUntangler {
         [&](int) {
           for (size_t b; !over.load(std::memory_order_relaxed) && (b = next.fetch_add(1)) < blocks;) {
             const size_t begin = b * kBlock, end = std::min(n, begin + kBlock);
-            terms(begin, end, eps, false);
+            terms(begin, end, eps, grad);
             for (size_t a = begin; a < end; ++a)
               if (!(tet_energy_[a] <= bound)) over.store(true, std::memory_order_relaxed);
           }

@@ -97,43 +97,6 @@ TEST_CASE("lbfgs stalls, x unchanged, when no step decreases the energy within m
   CHECK(evals == 1 + 5);  // the start, then one per halving
 }
 
-TEST_CASE("lbfgs with gradient_on_accept takes the same iterates, with gradients only at accepted points", "[lbfgs]") {
-  // a barrier (-log) along each axis: the unit step often leaves the domain and is halved
-  long value_calls = 0, gradient_calls = 0;
-  auto f = [&](const Eigen::VectorXd& x, Eigen::VectorXd* g) {
-    (g ? gradient_calls : value_calls)++;
-    double e = 0;
-    for (Eigen::Index i = 0; i < x.size(); ++i) {
-      const double a = 1.0 + double(i * i), t = 1.0 - x[i];
-      if (!(t > 0)) return std::numeric_limits<double>::infinity();
-      e += a * x[i] * x[i] - std::log(t) - 3.0 * x[i];
-      if (g) (*g)[i] = 2 * a * x[i] + 1.0 / t - 3.0;
-    }
-    return e;
-  };
-  auto run = [&](bool on_accept, long* iterations) {
-    Eigen::VectorXd x = Eigen::VectorXd::Constant(12, -2.0);
-    LbfgsOptions o;
-    o.iterations = 60;
-    o.first_move = 1.0;
-    o.gradient_on_accept = on_accept;
-    value_calls = gradient_calls = 0;
-    lbfgs_minimize(
-        x, f, o, [](int, const Eigen::VectorXd&, bool) { return false; }, iterations);
-    return x;
-  };
-  long it_a = 0, it_b = 0;
-  const Eigen::VectorXd a = run(false, &it_a);
-  const long trials = gradient_calls - 1;  // every trial asked for the gradient; the first call is the start
-  CHECK(value_calls == 0);
-  const Eigen::VectorXd b = run(true, &it_b);
-  CHECK(it_a == it_b);
-  CHECK(a == b);                      // bit for bit
-  CHECK(gradient_calls == it_b + 1);  // the start and one per accepted step
-  CHECK(value_calls == trials);
-  CHECK(trials > it_a);  // some first trials were rejected, so the option saved gradients
-}
-
 TEST_CASE("lbfgs with an energy that takes the acceptance bound: the same iterates when it gives up above it",
           "[lbfgs]") {
   // a barrier (-log) along each axis with its minimiser close to it: many trials leave the domain. The bounded
@@ -153,7 +116,7 @@ TEST_CASE("lbfgs with an energy that takes the acceptance bound: the same iterat
   auto f3 = [&](const Eigen::VectorXd& x, Eigen::VectorXd* g, double accept_up_to) {
     const bool bounded = accept_up_to < std::numeric_limits<double>::infinity();
     bounded_calls += bounded;
-    CHECK((!bounded || g == nullptr));  // a bound only where no gradient is asked
+    CHECK((!bounded || g != nullptr));  // the trials ask for the gradient too
     double e = 0;
     for (Eigen::Index i = 0; i < x.size(); ++i) {
       const double t = term(x, i, g);
@@ -165,7 +128,6 @@ TEST_CASE("lbfgs with an energy that takes the acceptance bound: the same iterat
   LbfgsOptions o;
   o.iterations = 60;
   o.first_move = 1.0;
-  o.gradient_on_accept = true;
   auto never = [](int, const Eigen::VectorXd&, bool) { return false; };
   Eigen::VectorXd a = Eigen::VectorXd::Constant(12, -2.0), b = a;
   long it_a = 0, it_b = 0;
@@ -174,12 +136,7 @@ TEST_CASE("lbfgs with an energy that takes the acceptance bound: the same iterat
   CHECK(it_a == it_b);
   CHECK(a == b);  // bit for bit
   CHECK(bounded_calls > it_b);
-  CHECK(cut > 0);                // some trials were given up early
-  o.gradient_on_accept = false;  // every trial asks for the gradient: no bound is passed
-  bounded_calls = 0;
-  Eigen::VectorXd c = Eigen::VectorXd::Constant(12, -2.0);
-  lbfgs_minimize(c, f3, o, never);
-  CHECK(bounded_calls == 0);
+  CHECK(cut > 0);  // some trials were given up early
 }
 
 TEST_CASE("lbfgs with the exact Hessian as preconditioner solves an ill-conditioned quadratic at once", "[lbfgs]") {
