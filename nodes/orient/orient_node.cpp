@@ -40,7 +40,12 @@ const bool registered_search = register_node(make_node<OrientParams>(
         .add("distinct_degrees", &OrientParams::distinct_degrees,
              "candidates closer than this many degrees (up to the cube's symmetries) are one", 1e-3, 45)
         .add("histogram", &OrientParams::histogram, "normal bins per cube-map face side", 2, 256)
-        .add("spread_starts", &OrientParams::spread_starts, "descents from rotations spread over SO(3)", 0, 1000),
+        .add("spread_starts", &OrientParams::spread_starts, "descents from rotations spread over SO(3)", 0, 1000)
+        .add("flat_sigma_degrees", &OrientParams::flat_sigma_degrees,
+             "a minimum is moved onto the frame of the flat faces: robust weights' first angle scale, 0 = off (3: on)",
+             0, 20)
+        .add("flat_min_area", &OrientParams::flat_min_area,
+             "... kept when this share of the area is then within 0.1 degree of an axis", 0, 1),
     {{"surface", artefact_name<SurfaceMesh>()}}, artefact_name<Frames>(),
     [](const OrientParams& p, const Inputs& in, NodeContext& ctx) {
       OrientStats st;

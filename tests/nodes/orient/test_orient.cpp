@@ -65,6 +65,51 @@ TEST_CASE("orient: a turned copy's best frame is as good as the original's", "[o
   }
 }
 
+TEST_CASE(
+    "orient: with flat_sigma_degrees, a turned part with flat and curved faces gets the flat faces' frame exactly",
+    "[orient]") {
+  // The quartic energy's minimum leans towards the rounded, curved and slanted faces' normals (here by
+  // 0.04-0.23 degree); the flat faces' frame is the part's own, and the turned copy must come back to it.
+  for (const char* name : {"l_block", "rod_with_holes", "fandisk_like"}) {
+    const SurfaceMesh s = make_shape({name, 32});
+    for (unsigned seed : {31u, 32u, 33u}) {
+      const Eigen::Matrix3d R = test::seeded_rotation(seed);
+      OrientParams on;
+      on.flat_sigma_degrees = 3;
+      OrientStats st;
+      const Frames f = orient_frames(test::rotated(s, R), on, &st);
+      const FrameCandidate& c = best_other(f);
+      INFO(name << " seed " << seed << ": " << c.source << ", " << frame_distance_degrees(c.R, R.transpose())
+                << " degrees from the part's frame");
+      CHECK(st.flattened >= 1);
+      CHECK(c.source.find("flat_faces") != std::string::npos);
+      CHECK(frame_distance_degrees(c.R, R.transpose()) < 1e-3);
+      // the energy's own minimum (the default)
+      CHECK(frame_distance_degrees(best_other(orient_frames(test::rotated(s, R), OrientParams{})).R, R.transpose()) >
+            1e-2);
+    }
+  }
+}
+
+TEST_CASE("orient: with flat_sigma_degrees, a smooth shape's minima are not moved (no flat faces)", "[orient]") {
+  for (const char* name : {"sphere", "torus", "bumpy_torus", "bent_pipe"}) {
+    const SurfaceMesh s = test::rotated(make_shape({name, 32}), test::seeded_rotation(41));
+    OrientParams on;
+    on.flat_sigma_degrees = 3;
+    OrientStats st;
+    const Frames with = orient_frames(s, on, &st);
+    const Frames without = orient_frames(s, OrientParams{});
+    INFO(name);
+    CHECK(st.flattened == 0);
+    REQUIRE(with.candidates.size() == without.candidates.size());
+    for (size_t k = 0; k < with.candidates.size(); ++k) {
+      CHECK(with.candidates[k].R == without.candidates[k].R);  // bit for bit
+      CHECK(with.candidates[k].energy == without.candidates[k].energy);
+      CHECK(with.candidates[k].branch == without.candidates[k].branch);
+    }
+  }
+}
+
 TEST_CASE("orient: limits of the search", "[orient]") {
   const SurfaceMesh s = test::rotated(make_shape({"l_block", 16}), test::seeded_rotation(5));
   OrientParams p;
@@ -76,6 +121,12 @@ TEST_CASE("orient: limits of the search", "[orient]") {
   CHECK(one.candidates[1].branch == 1);
   p.max_frames = 0;
   CHECK_THROWS_AS(orient_frames(s, p), ConfigError);
+  OrientParams q;
+  q.flat_sigma_degrees = 25;
+  CHECK_THROWS_AS(orient_frames(s, q), ConfigError);
+  q = OrientParams{};
+  q.flat_min_area = 1.5;
+  CHECK_THROWS_AS(orient_frames(s, q), ConfigError);
   SurfaceMesh flat;
   flat.V = RowMatrixX3d::Zero(3, 3);
   flat.F.resize(1, 3);
