@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <limits>
@@ -64,6 +65,16 @@ using Lanes = double __attribute__((vector_size(32)));
 /// The 64-bit integers of a Lanes' bits (a cast between the two reinterprets them).
 using LaneBits = long long __attribute__((vector_size(32)));
 constexpr int kLanes = int(sizeof(Lanes) / sizeof(double));
+
+/// Items [begin, end) kLanes at a time, then the rest one by one: f(Lanes{}, i) for i = begin, begin +
+/// kLanes, ... while kLanes items remain, then f(0.0, i) (a double) for each item left. f dispatches on
+/// the first argument's type, a computation written once for both (the same bits either way).
+template <class F>
+inline void for_lanes(std::size_t begin, std::size_t end, F&& f) {
+  std::size_t i = begin;
+  for (; i + kLanes <= end; i += kLanes) f(Lanes{}, i);
+  for (; i < end; ++i) f(0.0, i);
+}
 
 /// The mantissa part of libm_cbrt (below): m^(1/3) for m in [0.5, 1), a degree-6 polynomial and one Halley
 /// step, times f (2^((e mod 3)/3)). For double and for Lanes.

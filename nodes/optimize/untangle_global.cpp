@@ -28,6 +28,7 @@ using Vec3 = Eigen::Vector3d;
 using Mat83 = Eigen::Matrix<double, 8, 3>;
 using VecX = Eigen::VectorXd;
 
+using optimize_detail::for_lanes;
 using optimize_detail::kLanes;
 using optimize_detail::lane;
 using optimize_detail::Lanes;
@@ -279,9 +280,7 @@ class GlobalUntangler {
   double energy(const VecX& x, double eps, VecX* g) {
     apply(x);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, active_.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
-      size_t a = r.begin();
-      for (; a + kLanes <= r.end(); a += kLanes) terms_of<Lanes>(a, eps, g != nullptr);
-      for (; a < r.end(); ++a) terms_of<double>(a, eps, g != nullptr);
+      for_lanes(r.begin(), r.end(), [&](auto v, size_t a) { terms_of<decltype(v)>(a, eps, g != nullptr); });
     });
     double e = 0;
     for (double he : hex_energy_) e += he;

@@ -31,6 +31,7 @@ using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
 using Mat43 = Eigen::Matrix<double, 4, 3>;
 using VecX = Eigen::VectorXd;
+using optimize_detail::for_lanes;
 using optimize_detail::kLanes;
 using optimize_detail::lane;
 using optimize_detail::Lanes;
@@ -448,9 +449,7 @@ class MapUntangler {
   /// The terms of active tets [begin, end) into tet_energy_ and, if grad, their gradients into tet_grad_:
   /// kLanes tets at a time, the rest one by one (the same bits either way).
   void terms(size_t begin, size_t end, double eps, bool grad) {
-    size_t a = begin;
-    for (; a + kLanes <= end; a += kLanes) terms_of<Lanes>(a, eps, grad);
-    for (; a < end; ++a) terms_of<double>(a, eps, grad);
+    for_lanes(begin, end, [&](auto v, size_t a) { terms_of<decltype(v)>(a, eps, grad); });
   }
 
   template <class V>
