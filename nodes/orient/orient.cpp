@@ -111,15 +111,15 @@ double flat_area(const std::vector<Bin>& tris, double total, const Eigen::Matrix
   return a / total;
 }
 
-/// The frame of the flat faces next to a minimum d of the alignment energy. The quartic energy counts
-/// every normal, so the normals on no axis (a cylinder, a chamfer, a fillet) pull its minimum off the
-/// frame of a part's flat faces: by 0.93 degree on 7-connected, 4.7 on fandisk; the turned copy of a part
-/// then runs in a frame its original does not. Gauss-Newton on sum_t w_t |m_t - (m_t)_i e_i|^2 (m_t = R n_t,
-/// e_i its nearest axis) over left turns, with the robust weights w_t = A_t exp(-|m_t - (m_t)_i e_i|^2 /
-/// sigma^2) taken anew each step and sigma narrowed in steps, converges to the frame in which the faces
-/// near an axis are on it. Kept
-/// when it stays within distinct_degrees of d and puts at least flat_min_area of the area within 0.1
-/// degree of an axis; otherwise (a scan, an organic shape) d itself. Returns whether it was kept.
+/// The frame of the flat faces next to a minimum d of the alignment energy (the option flat_sigma_degrees).
+/// The quartic energy counts every normal, so the normals on no axis (a cylinder, a chamfer, a fillet) pull
+/// its minimum off the frame of a part's flat faces: the turned copies of 7-connected and fandisk ran 0.93
+/// and 4.7 degrees off it, where their originals run in it. Gauss-Newton over left turns on
+/// sum_t w_t |m_t - (m_t)_i e_i|^2 (m_t = R n_t, e_i its nearest axis), with the robust weights
+/// w_t = A_t exp(-|m_t - (m_t)_i e_i|^2 / sigma^2) taken anew each step and sigma narrowed in steps,
+/// converges to the frame in which the faces near an axis are on it. Kept when it stays within
+/// distinct_degrees of d and puts at least flat_min_area of the area within 0.1 degree of an axis;
+/// otherwise (a scan, an organic shape) d is left as it is. Returns whether it was kept.
 bool flat_faces(const std::vector<Bin>& tris, double total, const OrientParams& p, Descent& d) {
   if (p.flat_sigma_degrees <= 0) return false;
   Eigen::Matrix3d R = d.R;
