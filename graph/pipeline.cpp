@@ -9,7 +9,6 @@
 #include <oneapi/tbb/global_control.h>
 #include <oneapi/tbb/task_arena.h>
 
-#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <map>
@@ -447,9 +446,7 @@ RunResult Pipeline::run(const RunOptions& opt) const {
   result.error = run_flow_graph(nodes_, threads, [&](size_t i) { runner.run(i); });
   result.interrupted = interrupted();
   result.seconds = seconds_since(t0);
-  // At least every node's figure (Linux syncs its per-thread resident counters lazily: tools/bench.cpp)
   result.peak_rss_mb = process_memory().peak_rss_mb;
-  for (const NodeRecord& n : result.nodes) result.peak_rss_mb = std::max({result.peak_rss_mb, n.rss_mb, n.peak_rss_mb});
   return result;
 }
 

@@ -194,11 +194,7 @@ int cmd_bench(BenchOptions o) {
   out["cache"] = false;
   out["started_utc"] = started;
   out["total"] = stats(totals);
-  // At least every node's figure: Linux's resident counters are cached per thread and synced lazily, so a
-  // node's VmRSS read earlier can exceed the VmHWM read now by a fraction of a MiB (CI saw 76.82 > 76.63).
-  double peak = process_memory().peak_rss_mb;
-  for (const double x : rss) peak = std::max(peak, x);
-  out["peak_rss_mb"] = peak;
+  out["peak_rss_mb"] = process_memory().peak_rss_mb;  // at least every node's figure (runtime/memory.cpp)
   json units = json::object();
   for (const UnitRule& r : kUnits) units[r.stage] = std::string(r.unit) + ": " + r.doc;
   units["(other)"] =
