@@ -138,7 +138,7 @@ bool flat_faces(const std::vector<Bin>& tris, double total, const OrientParams& 
         if (!(w > 0)) continue;
         for (int j = 0; j < 3; ++j) {
           if (j == i) continue;
-          // d(turn(w, R) n)_j / dw = -([m]x) row j
+          // d(turn(v, R) n)_j / dv at v = 0: row j of -[m]x
           const Vec3 J = j == 0 ? Vec3(0, m[2], -m[1]) : j == 1 ? Vec3(-m[2], 0, m[0]) : Vec3(m[1], -m[0], 0);
           H += w * J * J.transpose();
           g += w * m[j] * J;
