@@ -105,6 +105,8 @@ class Optimizer {
         creases_ = find_creases(surface, p_.feature_angle, 1.5 * h);
         snap_ = snap_to_creases(V_, Q, creases_, h);
       }
+      if (!creases_.lines.empty() && p_.minimum_iterations > 0) patch_ = crease_faces(surface, creases_).patch;
+      crease_h_ = h;
       st_.crease_lines = int(creases_.lines.size());
       st_.crease_lines_snapped = snap_.lines_snapped;
       st_.crease_vertices = snap_.vertices;
@@ -183,6 +185,7 @@ class Optimizer {
   HexMesh finish(const std::string& source) {
     shape();
     return_released();
+    raise_min();
     HexMesh out;
     out.V = V_;
     out.H = H_;
@@ -911,6 +914,68 @@ class Optimizer {
     }
   }
 
+  /// (d) the minimum ascent (raise_minimum) around the worst hexes, boundary vertices sliding on the surface
+  /// (those on or near a crease stay); a round is kept only if it inverts nothing and raises the minimum.
+  void raise_min() {
+    PhaseTimer timer{st_.minimum_seconds};
+    for (int round = 0; round < p_.minimum_rounds && p_.minimum_iterations > 0 && !out_of_time(); ++round) {
+      const auto q = all_quality();
+      double gmin = 1;
+      for (const HexSJ& x : q) {
+        if (x.corner_min <= 0) return;  // the barrier needs an untangled mesh
+        gmin = std::min(gmin, x.sj);
+      }
+      // the poor hexes (as the max-min sweeps count them) near the minimum
+      std::vector<char> seeds(size_t(H_.rows()), 0), surf, fixed;
+      for (size_t h = 0; h < q.size(); ++h) seeds[h] = q[h].sj < std::min(gmin + p_.minimum_band, p_.target_sj);
+      GlobalUntangleParams gp = descent_setup(!p_.move_boundary, surf, fixed);
+      // released vertices no farther off the surface, freed crease vertices (on a leash) no farther from it,
+      // and boundary vertices within half a hex edge of a crease stay: the ascent would slide them off it and
+      // leave the crease with no vertex (the part's edge rounded)
+      const std::vector<char> reach =
+          cell_ring_region(H_, V_.rows(), p_.minimum_rings, [&](Eigen::Index h) { return seeds[size_t(h)] != 0; });
+      tbb::parallel_for(size_t(0), fixed.size(), [&](size_t v) {
+        fixed[v] |= released_[v] || (!leash_line_.empty() && (leash_line_[v] >= 0 || leash_corner_[v] >= 0));
+        if (fixed[v] || !reach[v] || !surf[v]) return;
+        const Vec3 x = V_.row(Eigen::Index(v)).transpose();
+        for (const auto& line : creases_.lines)
+          if ((closest_on_line(line, x) - x).norm() < 0.5 * crease_h_) {
+            fixed[v] = 1;
+            return;
+          }
+      });
+      gp.rings = p_.minimum_rings;
+      gp.polish_iterations = p_.minimum_iterations;
+      const RowMatrixX3d keep = V_;
+      ++st_.minimum_rounds;
+      if (!raise_minimum(V_, H_, surf, fixed, tree_, normals_, seeds, MinimumAscentParams{}, gp)) return;
+      // a boundary vertex that slid across a crease (onto another face of the part) would cut it: it goes back
+      if (patch_.size() > 0)
+        tbb::parallel_for(Eigen::Index(0), V_.rows(), [&](Eigen::Index v) {
+          if (!surf[size_t(v)] || V_.row(v) == keep.row(v)) return;
+          const int before = patch_[tree_.closest(keep.row(v).transpose()).triangle];
+          if (patch_[tree_.closest(V_.row(v).transpose()).triangle] != before) V_.row(v) = keep.row(v);
+        });
+      const double now = count_inverted() > 0 ? -1.0 : sj_min();
+      if (now <= gmin + 1e-6) {
+        V_ = keep;
+        return;
+      }
+      // the shape sweeps again over the moved vertices and a ring around them: the ascent pays no heed to the
+      // hexes above the minimum, the sweeps give them back their shape and never lower a local minimum
+      std::vector<char> moved(size_t(V_.rows()), 0);
+      for (Eigen::Index v = 0; v < V_.rows(); ++v) moved[size_t(v)] = V_.row(v) != keep.row(v);
+      const std::vector<char> region = cell_ring_region(H_, V_.rows(), 1, [&](Eigen::Index h) {
+        for (int k = 0; k < 8; ++k)
+          if (moved[size_t(H_(h, k))]) return true;
+        return false;
+      });
+      shape_sweeps(&region);
+      ++st_.minimum_kept;
+      st_.minimum_gain += sj_min() - gmin;
+    }
+  }
+
   /// (c0) the global average ascent (raise_average), kept only if it inverts nothing, keeps the minimum and
   /// raises the average. Boundary vertices stay: the sweeps of (c) slide them (tangent moves across a crease
   /// cut it, as in smooth_worst).
@@ -972,6 +1037,12 @@ class Optimizer {
   void shape() {
     PhaseTimer timer{st_.shape_seconds};  // the average ascent included
     average_global();
+    shape_sweeps(nullptr);
+  }
+
+  /// The sweeps of (c), over the vertices of the hexes below shape_target_sj (and among them only those
+  /// flagged in `only`, if given).
+  void shape_sweeps(const std::vector<char>* only) {
     double last_avg = -2;
     for (int it = 0; it < p_.shape_iterations && !out_of_time(); ++it) {
       // vertices of hexes below shape_target_sj (a regular grid interior needs no work)
@@ -987,6 +1058,8 @@ class Optimizer {
       for (Eigen::Index h = 0; h < H_.rows(); ++h)
         if (q[size_t(h)].sj < p_.shape_target_sj)
           for (int k = 0; k < 8; ++k) all[size_t(H_(h, k))] = 1;
+      if (only)
+        for (size_t v = 0; v < all.size(); ++v) all[v] &= (*only)[v];
       ++st_.shape_sweeps;
       ++st_.iterations;
       const bool winslow = it % 2 == 0;
@@ -1031,6 +1104,9 @@ class Optimizer {
   std::vector<char> released_;  ///< boundary vertices allowed off the surface (last-resort untangling)
   std::vector<double> cap_;     ///< after return_released: per released vertex, how far from the surface it may be
   SurfaceCreases creases_;      ///< the surface's sharp creases (feature_angle > 0)
+  Eigen::VectorXi patch_;       ///< per surface triangle: its face between the creases (empty without creases
+                                ///< or without the minimum ascent)
+  double crease_h_ = 0;         ///< the hex edge the creases were found at
   CreaseSnap snap_;             ///< boundary vertices on them (empty vectors when off)
   std::vector<int> leash_line_, leash_corner_;  ///< per vertex: the crease line / corner a freed crease vertex
                                                 ///< stays near, -1 none (free_padded_creases; empty when off)

@@ -5,11 +5,12 @@
 /// The paper used Mesquite; here every phase is a nonlinear Gauss-Seidel sweep over graph-coloured vertices or
 /// an L-BFGS descent over a region: (a) untangling (regularised Winslow energy, locally then globally), (b)
 /// max-min scaled Jacobian repositioning, (b') whole-hex moves towards the best-fit cube, (b'') region
-/// smoothing, (c0) a global ascent of the average, (c) shape improvement. A move is accepted only if it does
-/// not lower the minimum scaled Jacobian of the vertex's hexes and inverts none of them; boundary vertices move
-/// in the surface's tangent plane and are projected back onto it. When the first result is poor, a second
-/// candidate keeps the boundary vertices on the surface's creases (features.h). Each phase, its stopping rule
-/// and why: docs/optimize.md.
+/// smoothing, (c0) a global ascent of the average, (c) shape improvement, and, an option, (d) an ascent of the
+/// minimum around the worst hexes, boundary vertices sliding, then (c)'s sweeps over what it moved. A move is
+/// accepted only if it does not lower the minimum scaled Jacobian of the vertex's hexes and inverts none of
+/// them; boundary vertices move in the surface's tangent plane and are projected back onto it. When the first
+/// result is poor, a second candidate keeps the boundary vertices on the surface's creases (features.h). Each
+/// phase, its stopping rule and why: docs/optimize.md.
 #pragma once
 
 #include "nodes/algorithms/features.h"
@@ -41,6 +42,13 @@ struct OptimizeParams {
   int average_rings = 1;  ///< ... grown by this many rings of hexes, [0, 50]
   double average_tolerance =
       1e-3;  ///< the ascent stops when 25 iterations raise the scaled Jacobian of its region by less per hex, [0, 1]
+  int minimum_iterations = 0;  ///< L-BFGS iterations of each round of the last phase, the minimum ascent around the
+                               ///< worst hexes (boundary vertices sliding), 0 = off, [0, 100000]; an option (200):
+                               ///< not yet measured on the whole results table in its final form (docs/optimize.md)
+  int minimum_rounds = 3;      ///< its rounds, kept while the minimum scaled Jacobian rises, [0, 100]
+  int minimum_rings = 2;       ///< its region: the hexes within minimum_band of the minimum grown by this many rings,
+                               ///< [0, 50]
+  double minimum_band = 0.05;  ///< ... (and below target_sj), [0, 1]
   double shape_tolerance = 3e-4;  ///< the shape sweeps stop when a pair of them raises the average SJ by less, [0, 1]
   double target_sj = 0.8;         ///< max-min sweeps touch vertices with an incident hex below this SJ, [0, 1]
   double shape_target_sj = 0.99;  ///< shape sweeps touch vertices with an incident hex below this SJ, [0, 1]
@@ -73,15 +81,17 @@ struct OptimizeStats {
   double sj_min_after = 0, sj_avg_after = 0;
   long inverted_before = 0, inverted_after = 0;  ///< hexes with corner scaled Jacobian <= 0
   int untangle_sweeps = 0, maxmin_sweeps = 0, shape_sweeps = 0;
-  int average_kept = 0;                    ///< 1 when the global average ascent was kept
-  double average_gain = 0;                 ///< the average scaled Jacobian it added (with its max-min repair)
-  int element_sweeps = 0;                  ///< rounds of whole-hex moves
-  long element_moves = 0;                  ///< accepted whole-hex moves
-  int smooth_rounds = 0, smooth_kept = 0;  ///< region smoothing rounds tried / kept
-  int global_outer = 0;                    ///< ε updates of the global untangling
-  long global_lbfgs_iterations = 0;        ///< its L-BFGS iterations
-  long global_free_vertices = 0;           ///< vertices it moved (all runs)
-  long inverted_after_global = -1;         ///< inverted hexes after the global untangling (-1: not run)
+  int average_kept = 0;                      ///< 1 when the global average ascent was kept
+  double average_gain = 0;                   ///< the average scaled Jacobian it added (with its max-min repair)
+  int element_sweeps = 0;                    ///< rounds of whole-hex moves
+  long element_moves = 0;                    ///< accepted whole-hex moves
+  int smooth_rounds = 0, smooth_kept = 0;    ///< region smoothing rounds tried / kept
+  int minimum_rounds = 0, minimum_kept = 0;  ///< minimum ascent rounds tried / kept
+  double minimum_gain = 0;                   ///< the minimum scaled Jacobian it added
+  int global_outer = 0;                      ///< ε updates of the global untangling
+  long global_lbfgs_iterations = 0;          ///< its L-BFGS iterations
+  long global_free_vertices = 0;             ///< vertices it moved (all runs)
+  long inverted_after_global = -1;           ///< inverted hexes after the global untangling (-1: not run)
   int optimize_ways = 1;     ///< 2 when the local way left inverted hexes and the global way was tried too
   bool global_kept = false;  ///< the result is the global way's (fewer inverted hexes or a higher minimum)
   int iterations = 0;        ///< all sweeps
@@ -97,7 +107,7 @@ struct OptimizeStats {
   long crease_vertices = 0;           ///< boundary vertices kept on a crease line or at a crease corner
   double seconds = 0;
   double untangle_seconds = 0, global_seconds = 0, maxmin_seconds = 0, element_seconds = 0, smooth_seconds = 0,
-         shape_seconds = 0;  ///< per phase
+         shape_seconds = 0, minimum_seconds = 0;  ///< per phase
 
   /// Report names (runtime/stat_fields.h). The crease_* figures are the kept candidate's, reported by the
   /// binding (optimize_node.cpp).
@@ -115,14 +125,15 @@ struct OptimizeStats {
         stat("average_kept", &S::average_kept), stat("average_gain", &S::average_gain),
         stat("element_sweeps", &S::element_sweeps), stat("element_moves", &S::element_moves),
         stat("smooth_rounds", &S::smooth_rounds), stat("smooth_kept", &S::smooth_kept),
-        stat("iterations", &S::iterations), stat("moves", &S::moves), stat("colours", &S::colours),
-        stat("boundary_distance_max", &S::boundary_distance_max), stat("released_vertices", &S::released_vertices),
-        stat("returned_vertices", &S::returned_vertices),
+        stat("minimum_rounds", &S::minimum_rounds), stat("minimum_kept", &S::minimum_kept),
+        stat("minimum_gain", &S::minimum_gain), stat("iterations", &S::iterations), stat("moves", &S::moves),
+        stat("colours", &S::colours), stat("boundary_distance_max", &S::boundary_distance_max),
+        stat("released_vertices", &S::released_vertices), stat("returned_vertices", &S::returned_vertices),
         stat("returned_with_neighbours", &S::returned_with_neighbours), stat("time_budget_hit", &S::time_budget_hit),
         stat("seconds", &S::seconds), stat("phase_seconds.untangle", &S::untangle_seconds),
         stat("phase_seconds.global", &S::global_seconds), stat("phase_seconds.maxmin", &S::maxmin_seconds),
         stat("phase_seconds.element", &S::element_seconds), stat("phase_seconds.smooth", &S::smooth_seconds),
-        stat("phase_seconds.shape", &S::shape_seconds));
+        stat("phase_seconds.shape", &S::shape_seconds), stat("phase_seconds.minimum", &S::minimum_seconds));
   }
 };
 

@@ -42,6 +42,16 @@ const bool registered = register_node(
             .add("average_tolerance", &P::average_tolerance,
                  "the average ascent stops when 25 iterations raise its region's scaled Jacobians by less per hex", 0.0,
                  1.0)
+            .add("minimum_iterations", &P::minimum_iterations,
+                 "L-BFGS iterations of each round of the last phase, the minimum scaled Jacobian ascent around the "
+                 "worst hexes (0 = off)",
+                 0, 100000)
+            .add("minimum_rounds", &P::minimum_rounds,
+                 "rounds of the minimum ascent, kept while the minimum scaled Jacobian rises", 0, 100)
+            .add("minimum_rings", &P::minimum_rings,
+                 "the minimum ascent's region: the hexes within minimum_band of the minimum grown by this many rings",
+                 0, 50)
+            .add("minimum_band", &P::minimum_band, "see minimum_rings", 0.0, 1.0)
             .add("shape_iterations", &P::shape_iterations, "max global shape-improvement sweeps", 0, 10000)
             .add("shape_tolerance", &P::shape_tolerance,
                  "the shape sweeps stop when a pair of them raises the average scaled Jacobian by less", 0.0, 1.0)

@@ -96,18 +96,41 @@ class GlobalUntangler {
     // caller repairs that (max-min sweeps) or undoes the ascent. (A floor on each of the 9 Jacobians at the
     // true minimum holds the minimum exactly but leaves the region stiff: bunny's average rose 0.902 ->
     // 0.915 instead of 0.927, femur's 0.851 -> 0.898 instead of 0.907.)
-    floor_ = std::numeric_limits<double>::infinity();
-    for (int h : active_) {
-      Mat83 P;
-      for (int k = 0; k < 8; ++k) P.row(k) = V_.row(H_(h, k));
-      floor_ = std::min(floor_, hex_soft_sj(P, nullptr));
-    }
+    floor_ = lowest_soft_sj();
     set_base();
     VecX x = VecX::Zero(ndof_);
     lbfgs(x, 1e-10, false, iterations, a.tolerance);
     apply(x);
     project();
     return true;
+  }
+
+  /// Minimum scaled Jacobian ascent around the seed hexes (see raise_minimum()); returns false (nothing
+  /// moved) when the region is empty or has an inverted hex.
+  bool run_minimum(const std::vector<char>& seeds, const MinimumAscentParams& a) {
+    select(seeds, V_.rows(), H_.rows());
+    if (free_.empty() || count_inverted() > 0) return false;
+    minimum_ = true;
+    quality_barrier_ = a.barrier;
+    sharpness_ = a.sharpness;
+    floor_ = lowest_soft_sj();  // the reference of the exponentials
+    set_base();
+    VecX x = VecX::Zero(ndof_);
+    lbfgs(x, 1e-10, false, p_.polish_iterations);
+    apply(x);
+    project();
+    return true;
+  }
+
+  /// The lowest soft scaled Jacobian of the active hexes.
+  double lowest_soft_sj() const {
+    double m = std::numeric_limits<double>::infinity();
+    for (int h : active_) {
+      Mat83 P;
+      for (int k = 0; k < 8; ++k) P.row(k) = V_.row(H_(h, k));
+      m = std::min(m, hex_soft_sj(P, nullptr));
+    }
+    return m;
   }
 
   /// Smoothing of an untangled region: L-BFGS at ε -> 0 around the seed hexes (see smooth_region()).
@@ -310,18 +333,27 @@ class GlobalUntangler {
         for (int i = 0; i < 3; ++i) lane(P[k][i], l) = V_(H_(h, k), i) / scale_[a + size_t(l)];
     }
     V e;
-    if (average_) {  // raise_average: -soft SJ, the floor's penalty, the Winslow barrier
-      constexpr double kFloorPenalty = 1e3;
+    if (minimum_ || average_) {
       const V sj = optimize_detail::hex_soft_sj_of(P, grad ? G : nullptr);
-      const V gap = floor_ - sj;
-      const V below = optimize_detail::lane_select(gap < 0.0, V{}, gap);  // std::max(gap, 0.0)
-      e = -sj + kFloorPenalty * below * below;
-      if (grad) {
-        const V f = -(1.0 + 2.0 * kFloorPenalty * below);
+      V f;             // d e / d sj
+      if (minimum_) {  // raise_minimum: Σ exp(-k (soft SJ - floor))
+        const V arg = -sharpness_ * (sj - floor_);
+        if constexpr (std::is_same_v<V, double>)
+          e = std::exp(arg);
+        else
+          for (int l = 0; l < kLanes; ++l) e[l] = std::exp(arg[l]);
+        f = -sharpness_ * e;
+      } else {  // raise_average: -soft SJ, the floor's penalty
+        constexpr double kFloorPenalty = 1e3;
+        const V gap = floor_ - sj;
+        const V below = optimize_detail::lane_select(gap < 0.0, V{}, gap);  // std::max(gap, 0.0)
+        e = -sj + kFloorPenalty * below * below;
+        f = -(1.0 + 2.0 * kFloorPenalty * below);
+      }
+      if (grad)
         for (int k = 0; k < 8; ++k)
           for (int i = 0; i < 3; ++i) G[k][i] *= f;
-      }
-      if (quality_barrier_ > 0) {
+      if (quality_barrier_ > 0) {  // the Winslow barrier
         V Gb[8][3];
         e += quality_barrier_ * optimize_detail::hex_energy_of(P, eps, grad ? Gb : nullptr);
         if (grad)
@@ -405,6 +437,8 @@ class GlobalUntangler {
   std::vector<double> hex_energy_;
   std::vector<Mat83> hex_grad_;
   bool average_ = false;        ///< the energy is raise_average's
+  bool minimum_ = false;        ///< the energy is raise_minimum's
+  double sharpness_ = 0;        ///< raise_minimum: k of the exponentials
   double quality_barrier_ = 0;  ///< raise_average: the barrier's weight
   double floor_ = 0;            ///< raise_average: soft scaled Jacobian under which a hex is penalised
 };
@@ -429,6 +463,17 @@ long untangle_global(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<c
   const long left = u.run();
   if (stats) *stats = st;
   return left;
+}
+
+bool raise_minimum(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,
+                   const std::vector<char>& fixed, const TriangleTree& tree,
+                   const std::vector<Eigen::Vector3d>& normals, const std::vector<char>& seeds,
+                   const MinimumAscentParams& a, const GlobalUntangleParams& p, GlobalUntangleStats* stats) {
+  GlobalUntangleStats st;
+  GlobalUntangler u(V, H, on_surface, fixed, tree, normals, p, st);
+  const bool ran = u.run_minimum(seeds, a);
+  if (stats) *stats = st;
+  return ran;
 }
 
 bool raise_average(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,

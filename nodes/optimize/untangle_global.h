@@ -93,6 +93,24 @@ bool raise_average(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<cha
                    const std::vector<Eigen::Vector3d>& normals, const std::vector<char>& seeds,
                    const AverageAscentParams& a, const GlobalUntangleParams& p, GlobalUntangleStats* stats = nullptr);
 
+/// The minimum ascent's own settings (raise_minimum).
+struct MinimumAscentParams {
+  double sharpness = 40;  ///< k of the exponentials, > 0
+  double barrier = 0.01;  ///< weight of the Winslow barrier, >= 0
+};
+
+/// Raises the minimum scaled Jacobian around `seeds` (#H flags): the seeds' vertices grown by p.rings rings
+/// move together by L-BFGS (p.polish_iterations iterations) on Σ_h exp(-k (soft_sj(h) - m)) + a.barrier Σ_h E_h,
+/// a smooth maximum of the hexes' deficits (m the region's lowest soft scaled Jacobian at the start, soft_sj
+/// and E_h as in raise_average); surface vertices in their tangent planes, projected back. The caller checks
+/// that the minimum rose.
+/// \return false (V unchanged) when the region is empty or has an inverted hex
+/// \pre as untangle_global(); seeds.size() == H.rows(); a's fields in their ranges
+bool raise_minimum(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,
+                   const std::vector<char>& fixed, const TriangleTree& tree,
+                   const std::vector<Eigen::Vector3d>& normals, const std::vector<char>& seeds,
+                   const MinimumAscentParams& a, const GlobalUntangleParams& p, GlobalUntangleStats* stats = nullptr);
+
 /// Soft minimum of the 9 scaled Jacobians (8 corners, centre) of one hex, s_min - log(Σ exp(-40 (s_t - s_min))) / 40,
 /// within log(9) / 40 below the hex's scaled Jacobian, and, if grad, its gradient (8 by 3, row k = corner k).
 /// \param p  8 corners, VTK_HEXAHEDRON order

@@ -102,6 +102,7 @@ TEST_CASE("optimizer: a poor result is tried again with the boundary on the crea
   OptimizeParams frozen;  // no phase runs: the candidates differ only by where their boundary is projected
   frozen.untangle_iterations = frozen.global_iterations = frozen.iterations = 0;
   frozen.element_iterations = frozen.smooth_iterations = frozen.shape_iterations = frozen.average_iterations = 0;
+  frozen.minimum_iterations = 0;
   frozen.fallback_below_sj = 0.8;
   REQUIRE(hex_quality(poor, nullptr).inverted == 0);
   REQUIRE(hex_quality(poor, nullptr).sj_min < frozen.fallback_below_sj);

@@ -248,6 +248,53 @@ TEST_CASE("raise_average lifts the average of a swirled grid, keeps fixed vertic
   CHECK(F == folded.V);
 }
 
+TEST_CASE("raise_minimum lifts the worst hex of a grid with a squeezed vertex, keeps fixed vertices; declines a fold",
+          "[quality-opt]") {
+  // a 5x5x5 grid, its boundary fixed; the interior vertex at (2, 2, 2) pushed towards (3, 3, 2)
+  const int n = 5;
+  HexMesh g = test::grid_hex_mesh(n, n, n);
+  SurfaceMesh s = test::voxel_surface(test::voxel_box(n, n, n));
+  TriangleTree tree(s.V, s.F);
+  std::vector<Eigen::Vector3d> normals(size_t(s.F.rows()), Eigen::Vector3d::UnitZ());
+  std::vector<char> on_surface(size_t(g.V.rows()), 0), fixed(size_t(g.V.rows()), 0);
+  for (Eigen::Index v = 0; v < g.V.rows(); ++v) {
+    const Eigen::RowVector3d x = g.V.row(v);
+    fixed[size_t(v)] = (x.array() < 1e-12).any() || (x.array() > n - 1e-12).any();
+  }
+  const Eigen::Index c = 2 * 36 + 2 * 6 + 2;  // (2, 2, 2) in the 6x6x6 vertex grid
+  REQUIRE((g.V.row(c) - Eigen::RowVector3d(2, 2, 2)).norm() < 1e-12);
+  g.V.row(c) += Eigen::RowVector3d(0.45, 0.45, 0.0);
+  const HexQuality q0 = hex_quality(g, nullptr);
+  REQUIRE(q0.inverted == 0);
+  REQUIRE(q0.sj_min < 0.5);
+  std::vector<char> seeds(size_t(g.H.rows()), 0);
+  Eigen::VectorXd sj, corner_min;
+  hex_scaled_jacobians(g, sj, corner_min);
+  for (size_t h = 0; h < seeds.size(); ++h) seeds[h] = sj[Eigen::Index(h)] < q0.sj_min + 0.1;
+  GlobalUntangleParams p;
+  p.rings = 1;
+  p.polish_iterations = 200;
+  RowMatrixX3d V = g.V;
+  GlobalUntangleStats st;
+  REQUIRE(raise_minimum(V, g.H, on_surface, fixed, tree, normals, seeds, {}, p, &st));
+  HexMesh m = g;
+  m.V = V;
+  const HexQuality q1 = hex_quality(m, nullptr);
+  CHECK(st.lbfgs_iterations > 0);
+  CHECK(q1.inverted == 0);
+  CHECK(q1.sj_min > 0.95);  // the grid's own position is the optimum: every hex a cube
+  for (Eigen::Index v = 0; v < V.rows(); ++v)
+    if (fixed[size_t(v)]) CHECK(V.row(v) == g.V.row(v));
+  // an inverted hex in the region: nothing moves
+  RowMatrixX3d F = g.V;
+  F(c, 0) += 1.6;
+  HexMesh folded = g;
+  folded.V = F;
+  REQUIRE(hex_quality(folded, nullptr).inverted > 0);
+  CHECK_FALSE(raise_minimum(F, g.H, on_surface, fixed, tree, normals, seeds, {}, p));
+  CHECK(F == folded.V);
+}
+
 TEST_CASE(
     "fast_cbrt: within 4 ulps of std::cbrt on normal positives, std::cbrt's answer elsewhere; the Winslow "
     "term agrees either way",
