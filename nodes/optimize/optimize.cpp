@@ -673,6 +673,20 @@ class Optimizer {
     return q;
   }
 
+  /// The seeds of a descent around the worst hexes: the hexes whose SJ is below min(gmin + band, cap), with
+  /// gmin the global minimum, which it sets. Empty when a hex is inverted: the barriers need an untangled mesh.
+  std::vector<char> seeds_near_minimum(double band, double cap, double& gmin) const {
+    const auto q = all_quality();
+    gmin = 1;
+    for (const HexSJ& x : q) {
+      if (x.corner_min <= 0) return {};
+      gmin = std::min(gmin, x.sj);
+    }
+    std::vector<char> seeds(q.size(), 0);
+    for (size_t h = 0; h < q.size(); ++h) seeds[h] = q[h].sj < std::min(gmin + band, cap);
+    return seeds;
+  }
+
   /// Recomputes q[h] (hex_scaled_jacobian, as all_quality) and, if given, det[h] (min_corner_det) for the
   /// hexes incident to the vertices with `moved` set: in a sweep only selected vertices move. With every
   /// vertex set it is the full computation. \pre q, det sized #hexes
@@ -890,14 +904,10 @@ class Optimizer {
     for (int round = 0; round < p_.smooth_iterations && !out_of_time(); ++round) {
       // the shape improvement (the average) comes after: never spend more than half the budget before it
       if (elapsed() > 0.5 * p_.time_budget) break;
-      const auto q = all_quality();
       double gmin = 1;
-      for (const HexSJ& x : q) {
-        if (x.corner_min <= 0) return;  // the barrier needs an untangled mesh
-        gmin = std::min(gmin, x.sj);
-      }
-      std::vector<char> seeds(size_t(H_.rows()), 0), surf, fixed;
-      for (size_t h = 0; h < q.size(); ++h) seeds[h] = q[h].sj < gmin + 0.05;
+      const std::vector<char> seeds = seeds_near_minimum(0.05, HUGE_VAL, gmin);
+      if (seeds.empty()) return;
+      std::vector<char> surf, fixed;
       // the surface stays: sliding boundary vertices cut creases
       GlobalUntangleParams gp = descent_setup(true, surf, fixed);
       gp.polish_iterations = 200;
@@ -919,15 +929,11 @@ class Optimizer {
   void raise_min() {
     PhaseTimer timer{st_.minimum_seconds};
     for (int round = 0; round < p_.minimum_rounds && p_.minimum_iterations > 0 && !out_of_time(); ++round) {
-      const auto q = all_quality();
-      double gmin = 1;
-      for (const HexSJ& x : q) {
-        if (x.corner_min <= 0) return;  // the barrier needs an untangled mesh
-        gmin = std::min(gmin, x.sj);
-      }
       // the poor hexes (as the max-min sweeps count them) near the minimum
-      std::vector<char> seeds(size_t(H_.rows()), 0), surf, fixed;
-      for (size_t h = 0; h < q.size(); ++h) seeds[h] = q[h].sj < std::min(gmin + p_.minimum_band, p_.target_sj);
+      double gmin = 1;
+      const std::vector<char> seeds = seeds_near_minimum(p_.minimum_band, p_.target_sj, gmin);
+      if (seeds.empty()) return;
+      std::vector<char> surf, fixed;
       GlobalUntangleParams gp = descent_setup(!p_.move_boundary, surf, fixed);
       // released vertices no farther off the surface, freed crease vertices (on a leash) no farther from it,
       // and boundary vertices within half a hex edge of a crease stay: the ascent would slide them off it and

@@ -46,6 +46,19 @@ bool on_box_boundary(const Eigen::RowVector3d& x, double n) {
   return (x.array() < 1e-12).any() || (x.array() > n - 1e-12).any();
 }
 
+/// Turns every vertex of an n x n x n grid that `stays` does not hold about the box's vertical axis, by
+/// turn(z) radians: a smooth, low-frequency distortion that one-vertex sweeps undo slowly.
+template <class Turn, class Stays>
+void swirl(HexMesh& g, int n, Turn turn, Stays stays) {
+  for (Eigen::Index v = 0; v < g.V.rows(); ++v) {
+    const Eigen::RowVector3d x = g.V.row(v);
+    if (stays(x)) continue;
+    const double cx = x[0] - n / 2.0, cy = x[1] - n / 2.0, t = turn(x[2]);
+    g.V(v, 0) = n / 2.0 + std::cos(t) * cx - std::sin(t) * cy;
+    g.V(v, 1) = n / 2.0 + std::sin(t) * cx + std::cos(t) * cy;
+  }
+}
+
 }  // namespace
 
 TEST_CASE("the Winslow energy of a cube is 8 at any scale and grows with distortion", "[optimize]") {
@@ -462,13 +475,9 @@ TEST_CASE("the average ascent raises the average beyond the sweeps alone, keeps 
   const int n = 6;
   HexMesh g = test::grid_hex_mesh(n, n, n);
   const SurfaceMesh s = test::voxel_surface(test::voxel_box(n, n, n));
-  for (Eigen::Index v = 0; v < g.V.rows(); ++v) {
-    const Eigen::RowVector3d x = g.V.row(v);
-    if (on_box_boundary(x, n)) continue;
-    const double cx = x[0] - n / 2.0, cy = x[1] - n / 2.0, t = 0.25 * std::sin(M_PI * x[2] / n);
-    g.V(v, 0) = n / 2.0 + std::cos(t) * cx - std::sin(t) * cy;
-    g.V(v, 1) = n / 2.0 + std::sin(t) * cx + std::cos(t) * cy;
-  }
+  swirl(
+      g, n, [&](double z) { return 0.25 * std::sin(M_PI * z / n); },
+      [&](const Eigen::RowVector3d& x) { return on_box_boundary(x, n); });
   OptimizeParams p = no_phases();
   p.shape_iterations = 2;  // one pair of sweeps: what the ascent adds to them, not what 30 pairs reach anyway
   p.shape_tolerance = 0.0;
@@ -500,13 +509,11 @@ TEST_CASE("the minimum ascent raises the minimum after the max-min sweeps, bound
   const int n = 6;
   HexMesh g = test::grid_hex_mesh(n, n, n);
   const SurfaceMesh s = test::voxel_surface(test::voxel_box(n, n, n));
-  for (Eigen::Index v = 0; v < g.V.rows(); ++v) {
-    const Eigen::RowVector3d x = g.V.row(v);
-    if ((x.head<2>().array() < 1e-12).any() || (x.head<2>().array() > n - 1e-12).any()) continue;  // the sides stay
-    const double cx = x[0] - n / 2.0, cy = x[1] - n / 2.0, t = 0.15 + 0.1 * std::sin(M_PI * x[2] / n);
-    g.V(v, 0) = n / 2.0 + std::cos(t) * cx - std::sin(t) * cy;
-    g.V(v, 1) = n / 2.0 + std::sin(t) * cx + std::cos(t) * cy;
-  }
+  swirl(
+      g, n, [&](double z) { return 0.15 + 0.1 * std::sin(M_PI * z / n); },
+      [&](const Eigen::RowVector3d& x) {  // the sides stay
+        return (x.head<2>().array() < 1e-12).any() || (x.head<2>().array() > n - 1e-12).any();
+      });
   REQUIRE(hex_quality(g, nullptr).inverted == 0);
   OptimizeParams p = no_phases();
   p.iterations = 1;    // one max-min sweep and its follow-up over the worst hexes

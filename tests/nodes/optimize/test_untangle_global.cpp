@@ -16,6 +16,28 @@ std::array<Eigen::Vector3d, 8> hex_corners(const HexMesh& m, Eigen::Index h) {
   return p;
 }
 
+/// An n x n x n grid of unit cubes whose boundary vertices are fixed and none is on the surface (the box's
+/// surface only backs the tree the descents take).
+struct FixedBoundaryGrid {
+  int n;
+  HexMesh g;
+  SurfaceMesh s;
+  TriangleTree tree;
+  std::vector<Eigen::Vector3d> normals;
+  std::vector<char> on_surface, fixed;
+  explicit FixedBoundaryGrid(int n_)
+      : n(n_),
+        g(test::grid_hex_mesh(n, n, n)),
+        s(test::voxel_surface(test::voxel_box(n, n, n))),
+        tree(s.V, s.F),
+        normals(size_t(s.F.rows()), Eigen::Vector3d::UnitZ()),
+        on_surface(size_t(g.V.rows()), 0),
+        fixed(size_t(g.V.rows()), 0) {
+    for (Eigen::Index v = 0; v < g.V.rows(); ++v)
+      fixed[size_t(v)] = (g.V.row(v).array() < 1e-12).any() || (g.V.row(v).array() > n - 1e-12).any();
+  }
+};
+
 /// A 4x4x4 grid of unit cubes and its box surface: the surface's tree and triangle normals, and
 /// which vertices are on it.
 struct BoxGrid {
@@ -194,18 +216,15 @@ TEST_CASE("raise_average lifts the average of a swirled grid, keeps fixed vertic
           "[quality-opt]") {
   // a 6x6x6 grid whose interior is swirled about the z axis (a smooth, low-frequency distortion that
   // one-vertex sweeps undo slowly); its boundary is fixed
-  const int n = 6;
-  HexMesh g = test::grid_hex_mesh(n, n, n);
-  SurfaceMesh s = test::voxel_surface(test::voxel_box(n, n, n));
-  TriangleTree tree(s.V, s.F);
-  std::vector<Eigen::Vector3d> normals(size_t(s.F.rows()), Eigen::Vector3d::UnitZ());
-  std::vector<char> on_surface(size_t(g.V.rows()), 0), fixed(size_t(g.V.rows()), 0);
+  FixedBoundaryGrid b(6);
+  const int n = b.n;
+  HexMesh& g = b.g;
+  const TriangleTree& tree = b.tree;
+  const std::vector<Eigen::Vector3d>& normals = b.normals;
+  const std::vector<char>&on_surface = b.on_surface, &fixed = b.fixed;
   for (Eigen::Index v = 0; v < g.V.rows(); ++v) {
     const Eigen::RowVector3d x = g.V.row(v);
-    if ((x.array() < 1e-12).any() || (x.array() > n - 1e-12).any()) {
-      fixed[size_t(v)] = 1;
-      continue;
-    }
+    if (fixed[size_t(v)]) continue;
     const double cx = x[0] - n / 2.0, cy = x[1] - n / 2.0;
     const double t = 0.25 * std::sin(M_PI * x[2] / n);  // radians, largest mid-height
     g.V(v, 0) = n / 2.0 + std::cos(t) * cx - std::sin(t) * cy;
@@ -251,16 +270,11 @@ TEST_CASE("raise_average lifts the average of a swirled grid, keeps fixed vertic
 TEST_CASE("raise_minimum lifts the worst hex of a grid with a squeezed vertex, keeps fixed vertices; declines a fold",
           "[quality-opt]") {
   // a 5x5x5 grid, its boundary fixed; the interior vertex at (2, 2, 2) pushed towards (3, 3, 2)
-  const int n = 5;
-  HexMesh g = test::grid_hex_mesh(n, n, n);
-  SurfaceMesh s = test::voxel_surface(test::voxel_box(n, n, n));
-  TriangleTree tree(s.V, s.F);
-  std::vector<Eigen::Vector3d> normals(size_t(s.F.rows()), Eigen::Vector3d::UnitZ());
-  std::vector<char> on_surface(size_t(g.V.rows()), 0), fixed(size_t(g.V.rows()), 0);
-  for (Eigen::Index v = 0; v < g.V.rows(); ++v) {
-    const Eigen::RowVector3d x = g.V.row(v);
-    fixed[size_t(v)] = (x.array() < 1e-12).any() || (x.array() > n - 1e-12).any();
-  }
+  FixedBoundaryGrid b(5);
+  HexMesh& g = b.g;
+  const TriangleTree& tree = b.tree;
+  const std::vector<Eigen::Vector3d>& normals = b.normals;
+  const std::vector<char>&on_surface = b.on_surface, &fixed = b.fixed;
   const Eigen::Index c = 2 * 36 + 2 * 6 + 2;  // (2, 2, 2) in the 6x6x6 vertex grid
   REQUIRE((g.V.row(c) - Eigen::RowVector3d(2, 2, 2)).norm() < 1e-12);
   g.V.row(c) += Eigen::RowVector3d(0.45, 0.45, 0.0);
