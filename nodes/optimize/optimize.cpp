@@ -1049,6 +1049,15 @@ class Optimizer {
   /// The sweeps of (c), over the vertices of the hexes below shape_target_sj (and among them only those
   /// flagged in `only`, if given).
   void shape_sweeps(const std::vector<char>* only) {
+    // the hexes whose average decides convergence: all, or those with a vertex in `only` (a region's gain
+    // measured over the whole mesh would look converged after one pair of sweeps)
+    std::vector<char> counted(size_t(H_.rows()), 1);
+    if (only)
+      for (Eigen::Index h = 0; h < H_.rows(); ++h) {
+        bool in = false;
+        for (int k = 0; k < 8; ++k) in |= (*only)[size_t(H_(h, k))] != 0;
+        counted[size_t(h)] = in;
+      }
     double last_avg = -2;
     for (int it = 0; it < p_.shape_iterations && !out_of_time(); ++it) {
       // vertices of hexes below shape_target_sj (a regular grid interior needs no work)
@@ -1056,8 +1065,13 @@ class Optimizer {
       const auto q = all_quality();
       if (it % 2 == 0) {  // converged: a pair of sweeps (Winslow, sum of SJ) raised the average too little
         double sum = 0;
-        for (const auto& x : q) sum += x.sj;
-        const double avg = H_.rows() > 0 ? sum / double(H_.rows()) : 0.0;
+        long n = 0;
+        for (size_t h = 0; h < q.size(); ++h)
+          if (counted[h]) {
+            sum += q[h].sj;
+            ++n;
+          }
+        const double avg = n > 0 ? sum / double(n) : 0.0;
         if (avg - last_avg < p_.shape_tolerance) break;
         last_avg = avg;
       }

@@ -42,13 +42,12 @@ struct OptimizeParams {
   int average_rings = 1;  ///< ... grown by this many rings of hexes, [0, 50]
   double average_tolerance =
       1e-3;  ///< the ascent stops when 25 iterations raise the scaled Jacobian of its region by less per hex, [0, 1]
-  int minimum_iterations = 0;  ///< L-BFGS iterations of each round of the last phase, the minimum ascent around the
-                               ///< worst hexes (boundary vertices sliding), 0 = off, [0, 100000]; an option (200):
-                               ///< not yet measured on the whole results table in its final form (docs/optimize.md)
-  int minimum_rounds = 3;      ///< its rounds, kept while the minimum scaled Jacobian rises, [0, 100]
-  int minimum_rings = 2;       ///< its region: the hexes within minimum_band of the minimum grown by this many rings,
-                               ///< [0, 50]
-  double minimum_band = 0.05;  ///< ... (and below target_sj), [0, 1]
+  int minimum_iterations = 200;  ///< L-BFGS iterations of each round of the last phase, the minimum ascent around
+                                 ///< the worst hexes (boundary vertices sliding), 0 = off, [0, 100000]
+  int minimum_rounds = 3;        ///< its rounds, kept while the minimum scaled Jacobian rises, [0, 100]
+  int minimum_rings = 2;         ///< its region: the hexes within minimum_band of the minimum grown by this many rings,
+                                 ///< [0, 50]
+  double minimum_band = 0.05;    ///< ... (and below target_sj), [0, 1]
   double shape_tolerance = 3e-4;  ///< the shape sweeps stop when a pair of them raises the average SJ by less, [0, 1]
   double target_sj = 0.8;         ///< max-min sweeps touch vertices with an incident hex below this SJ, [0, 1]
   double shape_target_sj = 0.99;  ///< shape sweeps touch vertices with an incident hex below this SJ, [0, 1]
