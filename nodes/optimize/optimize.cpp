@@ -971,11 +971,8 @@ class Optimizer {
       // hexes above the minimum, the sweeps give them back their shape and never lower a local minimum
       std::vector<char> moved(size_t(V_.rows()), 0);
       for (Eigen::Index v = 0; v < V_.rows(); ++v) moved[size_t(v)] = V_.row(v) != keep.row(v);
-      const std::vector<char> region = cell_ring_region(H_, V_.rows(), 1, [&](Eigen::Index h) {
-        for (int k = 0; k < 8; ++k)
-          if (moved[size_t(H_(h, k))]) return true;
-        return false;
-      });
+      const std::vector<char> region =
+          cell_ring_region(H_, V_.rows(), 1, [&](Eigen::Index h) { return has_flagged_vertex(h, moved); });
       shape_sweeps(&region);
       ++st_.minimum_kept;
       st_.minimum_gain += sj_min() - gmin;
@@ -1046,6 +1043,13 @@ class Optimizer {
     shape_sweeps(nullptr);
   }
 
+  /// True if a vertex of hex h is flagged in `flags` (#V).
+  bool has_flagged_vertex(Eigen::Index h, const std::vector<char>& flags) const {
+    for (int k = 0; k < 8; ++k)
+      if (flags[size_t(H_(h, k))]) return true;
+    return false;
+  }
+
   /// The sweeps of (c), over the vertices of the hexes below shape_target_sj (and among them only those
   /// flagged in `only`, if given).
   void shape_sweeps(const std::vector<char>* only) {
@@ -1053,11 +1057,7 @@ class Optimizer {
     // measured over the whole mesh would look converged after one pair of sweeps)
     std::vector<char> counted(size_t(H_.rows()), 1);
     if (only)
-      for (Eigen::Index h = 0; h < H_.rows(); ++h) {
-        bool in = false;
-        for (int k = 0; k < 8; ++k) in |= (*only)[size_t(H_(h, k))] != 0;
-        counted[size_t(h)] = in;
-      }
+      for (Eigen::Index h = 0; h < H_.rows(); ++h) counted[size_t(h)] = has_flagged_vertex(h, *only);
     double last_avg = -2;
     for (int it = 0; it < p_.shape_iterations && !out_of_time(); ++it) {
       // vertices of hexes below shape_target_sj (a regular grid interior needs no work)
