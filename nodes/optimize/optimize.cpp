@@ -924,8 +924,85 @@ class Optimizer {
     }
   }
 
+  /// Boundary vertices near a crease in the minimum ascent's reach (raise_min).
+  struct NearCrease {
+    std::vector<char> fixed;          ///< #V: `fixed`, and every surface vertex within half a hex edge of a crease
+    std::vector<char> fixed_sliding;  ///< #V: the same but for the vertices that may slide
+    std::vector<Vec3> along;          ///< #V: the direction a vertex may slide in (zero: none)
+    std::vector<double> to_line;      ///< #V: a sliding vertex's distance to its line at the start
+    std::vector<int> line;            ///< #V: its line, -1 if none
+    long slides = 0;                  ///< vertices that may slide
+  };
+
+  /// The surface vertices in `reach` within half a hex edge of a crease line stay (the ascent would slide
+  /// them off it and leave the crease with no vertex); those near exactly one line, not near a crease corner,
+  /// may slide parallel to it (its tangent there, in the vertex's tangent plane) where the line does not
+  /// leave that plane steeply.
+  NearCrease near_crease_slides(const std::vector<char>& fixed, const std::vector<char>& reach,
+                                const std::vector<char>& surf) const {
+    constexpr double kSteep = 0.5;  // the line's tangent keeps at least this much of its length in the plane
+    const double near = 0.5 * crease_h_;
+    NearCrease c;
+    c.fixed = fixed;
+    c.fixed_sliding = fixed;
+    c.along.assign(fixed.size(), Vec3::Zero());
+    c.to_line.assign(fixed.size(), 0.0);
+    c.line.assign(fixed.size(), -1);
+    tbb::parallel_for(size_t(0), fixed.size(), [&](size_t v) {
+      if (fixed[v] || !reach[v] || !surf[v]) return;
+      const Vec3 x = V_.row(Eigen::Index(v)).transpose();
+      int lines = 0, which = -1;
+      Vec3 tangent = Vec3::Zero();
+      double d = 0;
+      for (size_t l = 0; l < creases_.lines.size(); ++l) {
+        Vec3 t;
+        const double dl = (closest_on_line(creases_.lines[l], x, &t) - x).norm();
+        if (dl >= near) continue;
+        if (++lines == 1) which = int(l), tangent = t, d = dl;
+      }
+      if (lines == 0) return;
+      c.fixed[v] = c.fixed_sliding[v] = 1;
+      if (lines > 1) return;
+      for (const Vec3& k : creases_.corners)
+        if ((k - x).norm() < near) return;
+      const Vec3 n = normals_[size_t(tree_.closest(x).triangle)];
+      const Vec3 in_plane = tangent - tangent.dot(n) * n;
+      if (in_plane.norm() < kSteep) return;
+      c.fixed_sliding[v] = 0;
+      c.along[v] = in_plane.normalized();
+      c.to_line[v] = d;
+      c.line[v] = which;
+    });
+    for (const Vec3& a : c.along) c.slides += !a.isZero();
+    return c;
+  }
+
+  /// A boundary vertex that slid across a crease (onto another face of the part) would cut it: it goes back
+  /// to `keep`.
+  void put_back_across_crease(const std::vector<char>& surf, const RowMatrixX3d& keep) {
+    if (patch_.size() == 0) return;
+    tbb::parallel_for(Eigen::Index(0), V_.rows(), [&](Eigen::Index v) {
+      if (!surf[size_t(v)] || V_.row(v) == keep.row(v)) return;
+      const int before = patch_[tree_.closest(keep.row(v).transpose()).triangle];
+      if (patch_[tree_.closest(V_.row(v).transpose()).triangle] != before) V_.row(v) = keep.row(v);
+    });
+  }
+
+  /// A sliding vertex that ended more than 0.05 hex edges farther from its crease line than it started
+  /// (the projection bent its slide away) goes back to `keep`.
+  void put_back_off_crease(const NearCrease& c, const RowMatrixX3d& keep) {
+    tbb::parallel_for(Eigen::Index(0), V_.rows(), [&](Eigen::Index v) {
+      const int l = c.line[size_t(v)];
+      if (l < 0) return;
+      const Vec3 x = V_.row(v).transpose();
+      if ((closest_on_line(creases_.lines[size_t(l)], x) - x).norm() > c.to_line[size_t(v)] + 0.05 * crease_h_)
+        V_.row(v) = keep.row(v);
+    });
+  }
+
   /// (d) the minimum ascent (raise_minimum) around the worst hexes, boundary vertices sliding on the surface
-  /// (those on or near a crease stay); a round is kept only if it inverts nothing and raises the minimum.
+  /// (those within half a hex edge of a crease stay, or slide parallel to it); a round is kept only if it
+  /// inverts nothing and raises the minimum.
   void raise_min() {
     PhaseTimer timer{st_.minimum_seconds};
     for (int round = 0; round < p_.minimum_rounds && p_.minimum_iterations > 0 && !out_of_time(); ++round) {
@@ -935,34 +1012,43 @@ class Optimizer {
       if (seeds.empty()) return;
       std::vector<char> surf, fixed;
       GlobalUntangleParams gp = descent_setup(!p_.move_boundary, surf, fixed);
-      // released vertices no farther off the surface, freed crease vertices (on a leash) no farther from it,
-      // and boundary vertices within half a hex edge of a crease stay: the ascent would slide them off it and
-      // leave the crease with no vertex (the part's edge rounded)
+      // released vertices no farther off the surface, freed crease vertices (on a leash) no farther from it
       const std::vector<char> reach =
           cell_ring_region(H_, V_.rows(), p_.minimum_rings, [&](Eigen::Index h) { return seeds[size_t(h)] != 0; });
       tbb::parallel_for(size_t(0), fixed.size(), [&](size_t v) {
         fixed[v] |= released_[v] || (!leash_line_.empty() && (leash_line_[v] >= 0 || leash_corner_[v] >= 0));
-        if (fixed[v] || !reach[v] || !surf[v]) return;
-        const Vec3 x = V_.row(Eigen::Index(v)).transpose();
-        for (const auto& line : creases_.lines)
-          if ((closest_on_line(line, x) - x).norm() < 0.5 * crease_h_) {
-            fixed[v] = 1;
-            return;
-          }
       });
+      // boundary vertices within half a hex edge of a crease stay, or slide parallel to it: sliding freely, the
+      // ascent would move them off it and leave the crease with no vertex (the part's edge rounded)
+      const NearCrease near = near_crease_slides(fixed, reach, surf);
       gp.rings = p_.minimum_rings;
       gp.polish_iterations = p_.minimum_iterations;
       const RowMatrixX3d keep = V_;
       ++st_.minimum_rounds;
-      if (!raise_minimum(V_, H_, surf, fixed, tree_, normals_, seeds, MinimumAscentParams{}, gp)) return;
-      // a boundary vertex that slid across a crease (onto another face of the part) would cut it: it goes back
-      if (patch_.size() > 0)
-        tbb::parallel_for(Eigen::Index(0), V_.rows(), [&](Eigen::Index v) {
-          if (!surf[size_t(v)] || V_.row(v) == keep.row(v)) return;
-          const int before = patch_[tree_.closest(keep.row(v).transpose()).triangle];
-          if (patch_[tree_.closest(V_.row(v).transpose()).triangle] != before) V_.row(v) = keep.row(v);
-        });
-      const double now = count_inverted() > 0 ? -1.0 : sj_min();
+      // one ascent: the minimum it reaches (-1 with an inverted hex), or -2 when it did not run (V_ at keep)
+      auto ascend = [&](bool slide) {
+        V_ = keep;
+        static const std::vector<Vec3> kNone;
+        if (!raise_minimum(V_, H_, surf, slide ? near.fixed_sliding : near.fixed, tree_, normals_, seeds,
+                           MinimumAscentParams{}, gp, nullptr, slide ? near.along : kNone))
+          return -2.0;
+        put_back_across_crease(surf, keep);
+        if (slide) put_back_off_crease(near, keep);
+        return count_inverted() > 0 ? -1.0 : sj_min();
+      };
+      // with the near-crease vertices fixed, then (where any may slide) sliding, from the same start: the
+      // higher minimum is kept, the fixed one on a tie
+      double now = ascend(false);
+      bool slid_kept = false;
+      if (near.slides > 0) {
+        const RowMatrixX3d fixed_result = V_;
+        const double slid = ascend(true);
+        if (slid > now)
+          now = slid, slid_kept = true;
+        else
+          V_ = fixed_result;
+      }
+      if (now == -2.0) return;
       if (now <= gmin + 1e-6) {
         V_ = keep;
         return;
@@ -975,6 +1061,7 @@ class Optimizer {
           cell_ring_region(H_, V_.rows(), 1, [&](Eigen::Index h) { return has_flagged_vertex(h, moved); });
       shape_sweeps(&region);
       ++st_.minimum_kept;
+      st_.minimum_slid += slid_kept;
       st_.minimum_gain += sj_min() - gmin;
     }
   }

@@ -86,6 +86,7 @@ struct OptimizeStats {
   long element_moves = 0;                    ///< accepted whole-hex moves
   int smooth_rounds = 0, smooth_kept = 0;    ///< region smoothing rounds tried / kept
   int minimum_rounds = 0, minimum_kept = 0;  ///< minimum ascent rounds tried / kept
+  int minimum_slid = 0;                      ///< ... of those kept, rounds whose near-crease vertices slid
   double minimum_gain = 0;                   ///< the minimum scaled Jacobian it added
   int global_outer = 0;                      ///< ε updates of the global untangling
   long global_lbfgs_iterations = 0;          ///< its L-BFGS iterations
@@ -125,9 +126,10 @@ struct OptimizeStats {
         stat("element_sweeps", &S::element_sweeps), stat("element_moves", &S::element_moves),
         stat("smooth_rounds", &S::smooth_rounds), stat("smooth_kept", &S::smooth_kept),
         stat("minimum_rounds", &S::minimum_rounds), stat("minimum_kept", &S::minimum_kept),
-        stat("minimum_gain", &S::minimum_gain), stat("iterations", &S::iterations), stat("moves", &S::moves),
-        stat("colours", &S::colours), stat("boundary_distance_max", &S::boundary_distance_max),
-        stat("released_vertices", &S::released_vertices), stat("returned_vertices", &S::returned_vertices),
+        stat("minimum_slid", &S::minimum_slid), stat("minimum_gain", &S::minimum_gain),
+        stat("iterations", &S::iterations), stat("moves", &S::moves), stat("colours", &S::colours),
+        stat("boundary_distance_max", &S::boundary_distance_max), stat("released_vertices", &S::released_vertices),
+        stat("returned_vertices", &S::returned_vertices),
         stat("returned_with_neighbours", &S::returned_with_neighbours), stat("time_budget_hit", &S::time_budget_hit),
         stat("seconds", &S::seconds), stat("phase_seconds.untangle", &S::untangle_seconds),
         stat("phase_seconds.global", &S::global_seconds), stat("phase_seconds.maxmin", &S::maxmin_seconds),

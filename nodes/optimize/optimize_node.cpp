@@ -118,7 +118,7 @@ const bool registered = register_node(
             ctx.warn("optimization stopped at its time budget of " + std::to_string(p.time_budget) + " s");
           return make_artefact(std::move(out));
         })
-        .with_version("30"));
+        .with_version("31"));
 
 }  // namespace
 }  // namespace polyhex

@@ -107,7 +107,8 @@ class GlobalUntangler {
 
   /// Minimum scaled Jacobian ascent around the seed hexes (see raise_minimum()); returns false (nothing
   /// moved) when the region is empty or has an inverted hex.
-  bool run_minimum(const std::vector<char>& seeds, const MinimumAscentParams& a) {
+  bool run_minimum(const std::vector<char>& seeds, const MinimumAscentParams& a, const std::vector<Vec3>& along) {
+    along_ = &along;
     select(seeds, V_.rows(), H_.rows());
     if (free_.empty() || count_inverted() > 0) return false;
     minimum_ = true;
@@ -173,6 +174,11 @@ class GlobalUntangler {
   }
 
  private:
+  /// True if surface vertex v slides along a given direction (raise_minimum's `along`).
+  bool on_line(int v) const {
+    return along_ != nullptr && !along_->empty() && on_surface_[size_t(v)] && !(*along_)[size_t(v)].isZero();
+  }
+
   bool out_of_time() {
     if (p_.seconds > 0 && seconds_since(t0_) > p_.seconds) st_.time_budget_hit = true;
     return st_.time_budget_hit;
@@ -213,7 +219,7 @@ class GlobalUntangler {
     for (Eigen::Index v = 0; v < nv; ++v)
       if (region[size_t(v)] && !fixed_[size_t(v)]) {
         dof_[size_t(v)] = int(ndof_);
-        ndof_ += on_surface_[size_t(v)] ? 2 : 3;
+        ndof_ += on_line(v) ? 1 : on_surface_[size_t(v)] ? 2 : 3;
         free_.push_back(int(v));
       }
     st_.free_vertices = long(free_.size());
@@ -246,6 +252,11 @@ class GlobalUntangler {
       const int v = free_[i];
       base_[i] = V_.row(v).transpose();
       if (!on_surface_[size_t(v)]) continue;
+      if (on_line(v)) {  // one unknown: the slide along the given direction
+        frame_[i].col(0) = (*along_)[size_t(v)].normalized();
+        frame_[i].col(1).setZero();
+        continue;
+      }
       const Vec3 n = normals_[size_t(tree_.closest(base_[i]).triangle)];
       const Vec3 t1 = (std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(n).normalized();
       frame_[i].col(0) = t1;
@@ -256,8 +267,9 @@ class GlobalUntangler {
   void apply(const VecX& x) {
     for (size_t i = 0; i < free_.size(); ++i) {
       const int v = free_[i], d = dof_[size_t(v)];
-      const Vec3 pos =
-          on_surface_[size_t(v)] ? Vec3(base_[i] + frame_[i] * x.segment<2>(d)) : Vec3(base_[i] + x.segment<3>(d));
+      const Vec3 pos = on_line(v)               ? Vec3(base_[i] + frame_[i].col(0) * x[d])
+                       : on_surface_[size_t(v)] ? Vec3(base_[i] + frame_[i] * x.segment<2>(d))
+                                                : Vec3(base_[i] + x.segment<3>(d));
       V_.row(v) = pos.transpose();
     }
   }
@@ -312,7 +324,9 @@ class GlobalUntangler {
       tbb::parallel_for(size_t(0), free_.size(), [&](size_t i) {
         const Vec3 gv = inc_.gather(i, hex_grad_);
         const int v = free_[i], d = dof_[size_t(v)];
-        if (on_surface_[size_t(v)])
+        if (on_line(v))
+          (*g)[d] = frame_[i].col(0).dot(gv);
+        else if (on_surface_[size_t(v)])
           g->segment<2>(d) = frame_[i].transpose() * gv;
         else
           g->segment<3>(d) = gv;
@@ -436,11 +450,12 @@ class GlobalUntangler {
   std::vector<Eigen::Matrix<double, 3, 2>> frame_;
   std::vector<double> hex_energy_;
   std::vector<Mat83> hex_grad_;
-  bool average_ = false;        ///< the energy is raise_average's
-  bool minimum_ = false;        ///< the energy is raise_minimum's
-  double sharpness_ = 0;        ///< raise_minimum: k of the exponentials
-  double quality_barrier_ = 0;  ///< raise_average: the barrier's weight
-  double floor_ = 0;            ///< raise_average: soft scaled Jacobian under which a hex is penalised
+  const std::vector<Vec3>* along_ = nullptr;  ///< raise_minimum: per vertex, a direction to slide along (or zero)
+  bool average_ = false;                      ///< the energy is raise_average's
+  bool minimum_ = false;                      ///< the energy is raise_minimum's
+  double sharpness_ = 0;                      ///< raise_minimum: k of the exponentials
+  double quality_barrier_ = 0;                ///< raise_average: the barrier's weight
+  double floor_ = 0;                          ///< raise_average: soft scaled Jacobian under which a hex is penalised
 };
 
 }  // namespace
@@ -468,10 +483,11 @@ long untangle_global(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<c
 bool raise_minimum(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,
                    const std::vector<char>& fixed, const TriangleTree& tree,
                    const std::vector<Eigen::Vector3d>& normals, const std::vector<char>& seeds,
-                   const MinimumAscentParams& a, const GlobalUntangleParams& p, GlobalUntangleStats* stats) {
+                   const MinimumAscentParams& a, const GlobalUntangleParams& p, GlobalUntangleStats* stats,
+                   const std::vector<Eigen::Vector3d>& along) {
   GlobalUntangleStats st;
   GlobalUntangler u(V, H, on_surface, fixed, tree, normals, p, st);
-  const bool ran = u.run_minimum(seeds, a);
+  const bool ran = u.run_minimum(seeds, a, along);
   if (stats) *stats = st;
   return ran;
 }

@@ -104,12 +104,15 @@ struct MinimumAscentParams {
 /// a smooth maximum of the hexes' deficits (m the region's lowest soft scaled Jacobian at the start, soft_sj
 /// and E_h as in raise_average); surface vertices in their tangent planes, projected back. The caller checks
 /// that the minimum rose.
+/// \param along  empty, or #V directions: a free surface vertex with a non-zero one moves along it only (one
+///               unknown instead of two; a vertex beside a crease sliding parallel to it), then is projected
 /// \return false (V unchanged) when the region is empty or has an inverted hex
-/// \pre as untangle_global(); seeds.size() == H.rows(); a's fields in their ranges
+/// \pre as untangle_global(); seeds.size() == H.rows(); a's fields in their ranges; along empty or of size V.rows()
 bool raise_minimum(RowMatrixX3d& V, const RowMatrixX8i& H, const std::vector<char>& on_surface,
                    const std::vector<char>& fixed, const TriangleTree& tree,
                    const std::vector<Eigen::Vector3d>& normals, const std::vector<char>& seeds,
-                   const MinimumAscentParams& a, const GlobalUntangleParams& p, GlobalUntangleStats* stats = nullptr);
+                   const MinimumAscentParams& a, const GlobalUntangleParams& p, GlobalUntangleStats* stats = nullptr,
+                   const std::vector<Eigen::Vector3d>& along = {});
 
 /// Soft minimum of the 9 scaled Jacobians (8 corners, centre) of one hex, s_min - log(Σ exp(-40 (s_t - s_min))) / 40,
 /// within log(9) / 40 below the hex's scaled Jacobian, and, if grad, its gradient (8 by 3, row k = corner k).

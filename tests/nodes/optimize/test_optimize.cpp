@@ -542,6 +542,35 @@ TEST_CASE("the minimum ascent raises the minimum after the max-min sweeps, bound
   }
 }
 
+TEST_CASE("the minimum ascent slides a boundary vertex near a crease parallel to it, never off its distance to it",
+          "[optimize]") {
+  // a 6x6x6 grid; the bottom vertex at (3, 1, 0) pushed to (3.3, 0.45, 0), 0.45 hex edges from the box's edge
+  // y = z = 0 (a crease): sliding freely the ascent would pull it off that distance, fixed it cannot help its
+  // hexes; sliding along the crease it goes back to x = 3 and keeps its distance
+  const int n = 6;
+  HexMesh g = test::grid_hex_mesh(n, n, n);
+  const SurfaceMesh s = test::voxel_surface(test::voxel_box(n, n, n));
+  const Eigen::Index c = (0 * (n + 1) + 1) * (n + 1) + 3;
+  REQUIRE((g.V.row(c) - Eigen::RowVector3d(3, 1, 0)).norm() < 1e-12);
+  g.V.row(c) << 3.3, 0.45, 0.0;
+  const HexQuality q0 = hex_quality(g, nullptr);
+  REQUIRE(q0.inverted == 0);
+  OptimizeParams p = no_phases();
+  p.minimum_iterations = 200;
+  p.target_sj = 0.95;
+  OptimizeStats st;
+  const HexMesh b = optimize_hexes(g, s, p, &st);
+  REQUIRE(st.crease_lines == 12);
+  CHECK(st.minimum_kept >= 1);
+  CHECK(st.minimum_slid >= 1);
+  CHECK(std::abs(b.V(c, 0) - 3) < 0.1);
+  CHECK(std::abs(b.V(c, 1) - 0.45) < 1e-9);
+  CHECK(std::abs(b.V(c, 2)) < 1e-9);
+  CHECK(st.inverted_after == 0);
+  CHECK(st.sj_min_after > q0.sj_min + 0.05);
+  CHECK(boundary_distance(b, s) < 1e-9);
+}
+
 TEST_CASE("optimize reports its phases in order through the progress callback", "[optimize][progress]") {
   const int n = 3;
   HexMesh g = test::grid_hex_mesh(n, n, n);

@@ -16,6 +16,23 @@ std::array<Eigen::Vector3d, 8> hex_corners(const HexMesh& m, Eigen::Index h) {
   return p;
 }
 
+/// Flags the hexes of g whose scaled Jacobian is below `below`.
+std::vector<char> hexes_near_minimum(const HexMesh& g, double below) {
+  Eigen::VectorXd sj, corner_min;
+  hex_scaled_jacobians(g, sj, corner_min);
+  std::vector<char> seeds(size_t(g.H.rows()), 0);
+  for (size_t h = 0; h < seeds.size(); ++h) seeds[h] = sj[Eigen::Index(h)] < below;
+  return seeds;
+}
+
+/// An ascent over the seeds and one ring around them, 200 iterations.
+GlobalUntangleParams one_ring_ascent() {
+  GlobalUntangleParams p;
+  p.rings = 1;
+  p.polish_iterations = 200;
+  return p;
+}
+
 /// An n x n x n grid of unit cubes whose boundary vertices are fixed and none is on the surface (the box's
 /// surface only backs the tree the descents take).
 struct FixedBoundaryGrid {
@@ -281,13 +298,8 @@ TEST_CASE("raise_minimum lifts the worst hex of a grid with a squeezed vertex, k
   const HexQuality q0 = hex_quality(g, nullptr);
   REQUIRE(q0.inverted == 0);
   REQUIRE(q0.sj_min < 0.5);
-  std::vector<char> seeds(size_t(g.H.rows()), 0);
-  Eigen::VectorXd sj, corner_min;
-  hex_scaled_jacobians(g, sj, corner_min);
-  for (size_t h = 0; h < seeds.size(); ++h) seeds[h] = sj[Eigen::Index(h)] < q0.sj_min + 0.1;
-  GlobalUntangleParams p;
-  p.rings = 1;
-  p.polish_iterations = 200;
+  const std::vector<char> seeds = hexes_near_minimum(g, q0.sj_min + 0.1);
+  const GlobalUntangleParams p = one_ring_ascent();
   RowMatrixX3d V = g.V;
   GlobalUntangleStats st;
   REQUIRE(raise_minimum(V, g.H, on_surface, fixed, tree, normals, seeds, {}, p, &st));
@@ -307,6 +319,50 @@ TEST_CASE("raise_minimum lifts the worst hex of a grid with a squeezed vertex, k
   REQUIRE(hex_quality(folded, nullptr).inverted > 0);
   CHECK_FALSE(raise_minimum(F, g.H, on_surface, fixed, tree, normals, seeds, {}, p));
   CHECK(F == folded.V);
+}
+
+TEST_CASE("raise_minimum moves a surface vertex given a direction along it only, and on the surface", "[quality-opt]") {
+  // a 5x5x5 grid, its boundary fixed but for the inner vertices of the bottom face, which stay on the surface;
+  // the bottom vertex at (2, 2, 0) pushed to (2.45, 2.45, 0)
+  FixedBoundaryGrid b(5);
+  HexMesh& g = b.g;
+  std::vector<char> on_surface = b.on_surface, fixed = b.fixed;
+  for (Eigen::Index v = 0; v < g.V.rows(); ++v) {
+    const Eigen::RowVector3d x = g.V.row(v);
+    if (std::abs(x.z()) < 1e-12 && x.x() > 1e-12 && x.x() < 5 - 1e-12 && x.y() > 1e-12 && x.y() < 5 - 1e-12)
+      on_surface[size_t(v)] = 1, fixed[size_t(v)] = 0;
+  }
+  const Eigen::Index c = 2 * 6 + 2;  // (2, 2, 0) in the 6x6x6 vertex grid
+  REQUIRE((g.V.row(c) - Eigen::RowVector3d(2, 2, 0)).norm() < 1e-12);
+  g.V.row(c) += Eigen::RowVector3d(0.45, 0.45, 0.0);
+  const HexQuality q0 = hex_quality(g, nullptr);
+  REQUIRE(q0.inverted == 0);
+  const std::vector<char> seeds = hexes_near_minimum(g, q0.sj_min + 0.1);
+  const GlobalUntangleParams p = one_ring_ascent();
+  // with no direction the vertex goes back towards (2, 2, 0) in both tangent coordinates
+  RowMatrixX3d free_v = g.V;
+  REQUIRE(raise_minimum(free_v, g.H, on_surface, fixed, b.tree, b.normals, seeds, {}, p));
+  CHECK(std::abs(free_v(c, 0) - 2) < 0.1);
+  CHECK(std::abs(free_v(c, 1) - 2) < 0.1);
+  CHECK(std::abs(free_v(c, 2)) < 1e-12);
+  // along x: only x moves (back towards 2), y and z stay
+  std::vector<Eigen::Vector3d> along(size_t(g.V.rows()), Eigen::Vector3d::Zero());
+  along[size_t(c)] = Eigen::Vector3d(2, 0, 0);  // any length
+  RowMatrixX3d slid = g.V;
+  REQUIRE(raise_minimum(slid, g.H, on_surface, fixed, b.tree, b.normals, seeds, {}, p, nullptr, along));
+  CHECK(slid(c, 0) < 2.45 - 0.2);
+  CHECK(std::abs(slid(c, 1) - 2.45) < 1e-12);
+  CHECK(std::abs(slid(c, 2)) < 1e-12);
+  HexMesh m = g;
+  m.V = slid;
+  const HexQuality q1 = hex_quality(m, nullptr);
+  CHECK(q1.inverted == 0);
+  CHECK(q1.sj_min > q0.sj_min);
+  // the other free bottom vertices (no direction) moved in the plane, and fixed ones not at all
+  for (Eigen::Index v = 0; v < g.V.rows(); ++v) {
+    if (fixed[size_t(v)]) CHECK(slid.row(v) == g.V.row(v));
+    if (on_surface[size_t(v)]) CHECK(std::abs(slid(v, 2)) < 1e-12);
+  }
 }
 
 TEST_CASE(
