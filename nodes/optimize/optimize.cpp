@@ -1025,9 +1025,9 @@ class Optimizer {
       gp.polish_iterations = p_.minimum_iterations;
       const RowMatrixX3d keep = V_;
       ++st_.minimum_rounds;
-      // one ascent: the minimum it reaches (-1 with an inverted hex), or -2 when it did not run (V_ at keep)
+      // one ascent from V_ = keep: the minimum it reaches (-1 with an inverted hex), or -2 when it did not run
+      // (V_ left at keep)
       auto ascend = [&](bool slide) {
-        V_ = keep;
         static const std::vector<Vec3> kNone;
         if (!raise_minimum(V_, H_, surf, slide ? near.fixed_sliding : near.fixed, tree_, normals_, seeds,
                            MinimumAscentParams{}, gp, nullptr, slide ? near.along : kNone))
@@ -1042,6 +1042,7 @@ class Optimizer {
       bool slid_kept = false;
       if (near.slides > 0) {
         const RowMatrixX3d fixed_result = V_;
+        V_ = keep;
         const double slid = ascend(true);
         if (slid > now)
           now = slid, slid_kept = true;
