@@ -926,12 +926,18 @@ class Optimizer {
 
   /// Boundary vertices near a crease in the minimum ascent's reach (raise_min).
   struct NearCrease {
-    std::vector<char> fixed;          ///< #V: `fixed`, and every surface vertex within half a hex edge of a crease
-    std::vector<char> fixed_sliding;  ///< #V: the same but for the vertices that may slide
-    std::vector<Vec3> along;          ///< #V: the direction a vertex may slide in (zero: none)
-    std::vector<double> to_line;      ///< #V: a sliding vertex's distance to its line at the start
-    std::vector<int> line;            ///< #V: its line, -1 if none
-    long slides = 0;                  ///< vertices that may slide
+    std::vector<char> fixed;      ///< #V: `fixed`, and every surface vertex within half a hex edge of a crease
+    std::vector<Vec3> along;      ///< #V: the direction a vertex may slide in (zero: none)
+    std::vector<double> to_line;  ///< #V: a sliding vertex's distance to its line at the start
+    std::vector<int> line;        ///< #V: its line, -1 if none
+    long slides = 0;              ///< vertices that may slide
+
+    /// `fixed` but for the vertices that may slide.
+    std::vector<char> fixed_unless_sliding() const {
+      std::vector<char> f = fixed;
+      for (size_t v = 0; v < f.size(); ++v) f[v] = f[v] && along[v].isZero();
+      return f;
+    }
   };
 
   /// The surface vertices in `reach` within half a hex edge of a crease line stay (the ascent would slide
@@ -944,7 +950,6 @@ class Optimizer {
     const double near = 0.5 * crease_h_;
     NearCrease c;
     c.fixed = fixed;
-    c.fixed_sliding = fixed;
     c.along.assign(fixed.size(), Vec3::Zero());
     c.to_line.assign(fixed.size(), 0.0);
     c.line.assign(fixed.size(), -1);
@@ -961,14 +966,13 @@ class Optimizer {
         if (++lines == 1) which = int(l), tangent = t, d = dl;
       }
       if (lines == 0) return;
-      c.fixed[v] = c.fixed_sliding[v] = 1;
+      c.fixed[v] = 1;
       if (lines > 1) return;
       for (const Vec3& k : creases_.corners)
         if ((k - x).norm() < near) return;
       const Vec3 n = normals_[size_t(tree_.closest(x).triangle)];
       const Vec3 in_plane = tangent - tangent.dot(n) * n;
       if (in_plane.norm() < kSteep) return;
-      c.fixed_sliding[v] = 0;
       c.along[v] = in_plane.normalized();
       c.to_line[v] = d;
       c.line[v] = which;
@@ -1029,7 +1033,7 @@ class Optimizer {
       // (V_ left at keep)
       auto ascend = [&](bool slide) {
         static const std::vector<Vec3> kNone;
-        if (!raise_minimum(V_, H_, surf, slide ? near.fixed_sliding : near.fixed, tree_, normals_, seeds,
+        if (!raise_minimum(V_, H_, surf, slide ? near.fixed_unless_sliding() : near.fixed, tree_, normals_, seeds,
                            MinimumAscentParams{}, gp, nullptr, slide ? near.along : kNone))
           return -2.0;
         put_back_across_crease(surf, keep);

@@ -17,6 +17,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <type_traits>
 #include <vector>
@@ -219,8 +220,10 @@ class GlobalUntangler {
     for (Eigen::Index v = 0; v < nv; ++v)
       if (region[size_t(v)] && !fixed_[size_t(v)]) {
         dof_[size_t(v)] = int(ndof_);
-        ndof_ += on_line(v) ? 1 : on_surface_[size_t(v)] ? 2 : 3;
+        const int n = on_line(v) ? 1 : on_surface_[size_t(v)] ? 2 : 3;
+        ndof_ += n;
         free_.push_back(int(v));
+        unknowns_.push_back(std::uint8_t(n));
       }
     st_.free_vertices = long(free_.size());
     active_index_.assign(size_t(nh), -1);
@@ -251,8 +254,8 @@ class GlobalUntangler {
     for (size_t i = 0; i < free_.size(); ++i) {
       const int v = free_[i];
       base_[i] = V_.row(v).transpose();
-      if (!on_surface_[size_t(v)]) continue;
-      if (on_line(v)) {  // one unknown: the slide along the given direction
+      if (unknowns_[i] == 3) continue;
+      if (unknowns_[i] == 1) {  // one unknown: the slide along the given direction
         frame_[i].col(0) = (*along_)[size_t(v)].normalized();
         frame_[i].col(1).setZero();
         continue;
@@ -267,9 +270,9 @@ class GlobalUntangler {
   void apply(const VecX& x) {
     for (size_t i = 0; i < free_.size(); ++i) {
       const int v = free_[i], d = dof_[size_t(v)];
-      const Vec3 pos = on_line(v)               ? Vec3(base_[i] + frame_[i].col(0) * x[d])
-                       : on_surface_[size_t(v)] ? Vec3(base_[i] + frame_[i] * x.segment<2>(d))
-                                                : Vec3(base_[i] + x.segment<3>(d));
+      const Vec3 pos = unknowns_[i] == 1   ? Vec3(base_[i] + frame_[i].col(0) * x[d])
+                       : unknowns_[i] == 2 ? Vec3(base_[i] + frame_[i] * x.segment<2>(d))
+                                           : Vec3(base_[i] + x.segment<3>(d));
       V_.row(v) = pos.transpose();
     }
   }
@@ -324,9 +327,9 @@ class GlobalUntangler {
       tbb::parallel_for(size_t(0), free_.size(), [&](size_t i) {
         const Vec3 gv = inc_.gather(i, hex_grad_);
         const int v = free_[i], d = dof_[size_t(v)];
-        if (on_line(v))
+        if (unknowns_[i] == 1)
           (*g)[d] = frame_[i].col(0).dot(gv);
-        else if (on_surface_[size_t(v)])
+        else if (unknowns_[i] == 2)
           g->segment<2>(d) = frame_[i].transpose() * gv;
         else
           g->segment<3>(d) = gv;
@@ -441,8 +444,9 @@ class GlobalUntangler {
 
   std::vector<int> dof_;  ///< #V first unknown of a free vertex, -1 otherwise
   Eigen::Index ndof_ = 0;
-  std::vector<int> free_;    ///< free vertices
-  std::vector<int> active_;  ///< hexes with a free vertex
+  std::vector<int> free_;               ///< free vertices
+  std::vector<std::uint8_t> unknowns_;  ///< per free vertex: 1 (slides along its line), 2 (on the surface) or 3
+  std::vector<int> active_;             ///< hexes with a free vertex
   std::vector<int> active_index_;
   std::vector<double> scale_;  ///< per active hex: initial mean edge length
   CellIncidence inc_;          ///< per free vertex: (active hex, corner) pairs
