@@ -232,6 +232,8 @@ OrderAcceptance accept_orders(const std::vector<OrderedPair>& ordered, int nG) {
     }
     r.up[lo].push_back(hi);
   }
+  r.gap.resize(nG);
+  for (int g = 0; g < nG; ++g) r.gap[g].assign(r.up[g].size(), 1);
   return r;
 }
 
@@ -245,18 +247,20 @@ std::vector<long> place_levels(const OrderAcceptance& acc, const std::vector<dou
     if (!(w > 0)) throw std::invalid_argument("place_levels: a group weight is not positive");
   struct Order {
     int lo, hi;
-    double lambda, inv_mass;
+    double lambda, inv_mass, gap;
   };
   std::vector<Order> orders;
   for (int lo = 0; lo < nG; ++lo)
-    for (int hi : acc.up[lo]) orders.push_back({lo, hi, 0.0, 1.0 / (1.0 / weight[lo] + 1.0 / weight[hi])});
+    for (size_t j = 0; j < acc.up[lo].size(); ++j)
+      orders.push_back({lo, acc.up[lo][j], 0.0, 1.0 / (1.0 / weight[lo] + 1.0 / weight[acc.up[lo][j]]),
+                        acc.gap.empty() ? 1.0 : double(acc.gap[lo][j])});
   // x = t + W^-1 A^T λ; each step raises one multiplier by the amount that makes its order hold exactly
   // (or lowers it towards 0 where the order holds with room), which keeps λ >= 0: dual coordinate ascent.
   std::vector<double> x = target;
   for (int sweep = 0; sweep < max_sweeps && !orders.empty(); ++sweep) {
     double change = 0;
     for (Order& o : orders) {
-      const double violation = 1.0 - (x[o.hi] - x[o.lo]);
+      const double violation = o.gap - (x[o.hi] - x[o.lo]);
       const double lambda = std::max(0.0, o.lambda + violation * o.inv_mass);
       const double d = lambda - o.lambda;
       if (d == 0) continue;
@@ -285,8 +289,9 @@ void push_levels(const OrderAcceptance& acc, std::vector<long>& k) {
     if (indeg[g] == 0) queue.push_back(g);
   for (size_t head = 0; head < queue.size(); ++head) {
     const int g = queue[head];
-    for (int y : acc.up[g]) {
-      k[y] = std::max(k[y], k[g] + 1);
+    for (size_t j = 0; j < acc.up[g].size(); ++j) {
+      const int y = acc.up[g][j];
+      k[y] = std::max(k[y], k[g] + (acc.gap.empty() ? 1 : acc.gap[g][j]));
       if (--indeg[y] == 0) queue.push_back(y);
     }
   }

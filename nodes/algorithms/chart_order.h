@@ -93,17 +93,19 @@ AxisChartOrder chart_order_evidence(const RowMatrixX3d& V, const TetEdgeGraph& g
                                     const std::vector<char>* crease_vertex = nullptr);
 
 struct OrderAcceptance {
-  std::vector<std::vector<int>> up;  ///< accepted orders as a graph: lower group -> upper groups
-  std::vector<int> dropped;          ///< indices into the ordered pairs of those dropped (each closed a cycle)
+  std::vector<std::vector<int>> up;   ///< accepted orders as a graph: lower group -> upper groups
+  std::vector<std::vector<int>> gap;  ///< per entry of up: the least level difference it asks for (1; the map
+                                      ///< sets 2 where a feature line needs a level between the two groups)
+  std::vector<int> dropped;           ///< indices into the ordered pairs of those dropped (each closed a cycle)
 };
 
 /// Accepts the ordered pairs by decreasing evidence (stable), dropping each that would close a cycle.
 /// \pre every pair's groups are in [0, groups)
 OrderAcceptance accept_orders(const std::vector<OrderedPair>& ordered, int groups);
 
-/// Integer levels (in hex edges) for the groups that keep every accepted order at least one level apart
-/// and move the groups as little as they must: the weighted least-squares placement
-///   min Σ_g w_g (x_g − t_g)²  subject to  x_hi − x_lo ≥ 1 for every accepted order lo -> hi,
+/// Integer levels (in hex edges) for the groups that keep every accepted order at least one level apart (its
+/// `gap`, 1 or more) and move the groups as little as they must: the weighted least-squares placement
+///   min Σ_g w_g (x_g − t_g)²  subject to  x_hi − x_lo ≥ gap for every accepted order lo -> hi,
 /// solved by dual coordinate ascent (Hildreth's method: one multiplier per order, each step projects onto
 /// one constraint; exact for this convex quadratic program), then rounded to the nearest integers (rounding
 /// is monotone, so every gap of at least 1 stays at least 1) and, as a safeguard when the ascent stopped at
@@ -122,7 +124,7 @@ OrderAcceptance accept_orders(const std::vector<OrderedPair>& ordered, int group
 std::vector<long> place_levels(const OrderAcceptance& accepted, const std::vector<double>& target,
                                const std::vector<double>& weight, int max_sweeps = 20000);
 
-/// Pushes every group up to at least one level above each group below it in the accepted orders, in
+/// Pushes every group up to at least its order's gap (1 or more) above each group below it in the accepted orders, in
 /// topological order (a longest-path pass from the given levels): afterwards every accepted order holds.
 /// \pre k.size() == accepted.up.size()
 /// \throw std::invalid_argument on a size mismatch or a cycle in the accepted orders

@@ -33,6 +33,8 @@ using Clock = std::chrono::steady_clock;
 /// straight run is as likely a scan's faceting (femur keeps a dozen such lines of 2-5 hex edges), and a line
 /// pinned through a chart where the part has no edge only costs the map.
 constexpr double kFeatureLineLength = 4.0;
+/// A feature line given room between its flanks stays free within this many hex edges of another feature line.
+constexpr double kCrossingFree = 2.0;
 
 /// Mean value coordinates of point x w.r.t. the triangle (p1,p2,p3) of a closed star polyhedron around x
 /// (Ju, Schaefer, Warren 2005, as used by [FKR05] for the 3D Laplacian). Adds to w[0..2].
@@ -296,6 +298,61 @@ PoissonStep poisson_step(const AxisInputs& in, const AxisChartOrder& order, cons
   return ps;
 }
 
+/// The two a-charts beside a feature line of axis a that stand on either side of it and face opposite ways: the
+/// walls of a V-shaped slot whose bottom the line is (+a below, -a above) or the faces of a thin fin whose edge it
+/// is (-a below, +a above). Rounded one level apart, they leave no lattice line between them for the crease.
+struct LineFlanks {
+  int lo = -1, hi = -1;     ///< their chart groups, below and above the line (-1: the line has no such pair)
+  std::vector<int> charts;  ///< the a-charts within two edges of the line's vertices
+};
+
+/// Per feature line (in.lines), its flanks on axis a from the Poisson step's values: among the a-charts within
+/// two edges of its vertices, the nearest below the mean of its vertices and the nearest above, if they face
+/// opposite ways. (The line's chart may border other a-charts far from the line: a slot's floor that runs on
+/// past a crossing slot.)
+std::vector<LineFlanks> line_flanks(int a, const AxisInputs& in, const AxisChartOrder& order, const PoissonStep& ps) {
+  std::vector<LineFlanks> out(in.lines.size());
+  if (!in.p.feature_line_room) return out;
+  for (size_t i = 0; i < in.lines.size(); ++i) {
+    const FeatureLine& line = in.lines[i];
+    if (line.axis != a || line.vertices.empty()) continue;
+    // the a-charts within two edges of at least half of the line's vertices (one near its end only may belong
+    // to a crossing feature)
+    std::map<int, int> count;
+    std::vector<int> ring;
+    for (int v0 : line.vertices) {
+      ring.assign(1, v0);
+      for (size_t x = 0, to = 1, r = 0; r < 2; ++r, to = ring.size())
+        for (; x < to; ++x)
+          for (int e = in.graph.start[size_t(ring[x])]; e < in.graph.start[size_t(ring[x]) + 1]; ++e)
+            ring.push_back(in.graph.nbr[size_t(e)]);
+      std::vector<int> near;
+      for (int v : ring)
+        for (int ch : in.vcharts[size_t(v)])
+          if (label_axis(in.chart_label[size_t(ch)]) == a) near.push_back(ch);
+      std::sort(near.begin(), near.end());
+      near.erase(std::unique(near.begin(), near.end()), near.end());
+      for (int ch : near) ++count[ch];
+    }
+    std::vector<int>& charts = out[i].charts;
+    for (const auto& [ch, n] : count)
+      if (2 * n >= int(line.vertices.size())) charts.push_back(ch);
+    double mean = 0;
+    for (int v : line.vertices) mean += ps.y[ps.var[size_t(v)]];
+    mean /= double(line.vertices.size());
+    double below = -std::numeric_limits<double>::infinity(), above = std::numeric_limits<double>::infinity();
+    int lo = -1, hi = -1, lo_sign = 0, hi_sign = 0;
+    for (int ch : charts) {
+      const int g = order.chart_group[size_t(ch)];
+      const double c = ps.y[ps.nFree + g];
+      if (c < mean && c > below) below = c, lo = g, lo_sign = label_sign(in.chart_label[size_t(ch)]);
+      if (c > mean && c < above) above = c, hi = g, hi_sign = label_sign(in.chart_label[size_t(ch)]);
+    }
+    if (lo >= 0 && hi >= 0 && lo != hi && lo_sign == -hi_sign) out[i].lo = lo, out[i].hi = hi;
+  }
+  return out;
+}
+
 /// Rounding to the lattice, keeping ordered pairs apart (step 3, §5.2): the integer level of every chart
 /// group. The ordered pairs as a graph "lower -> upper": pairs are taken by decreasing evidence and one
 /// that would close a cycle (contradicting stronger evidence) is dropped; then the levels: the balanced
@@ -303,7 +360,7 @@ PoissonStep poisson_step(const AxisInputs& in, const AxisChartOrder& order, cons
 /// topological order (longest path from the rounded values). The per-pair nudging before both could
 /// undo itself on conflicting pairs and leave orders swapped.
 std::vector<long> chart_levels(const AxisChartOrder& order, const PoissonStep& ps, const AxisInputs& in,
-                               PositionDeformStats& st) {
+                               const std::vector<LineFlanks>& flanks, PositionDeformStats& st) {
   const int nG = order.groups;
   const double h = in.h;
   std::vector<double> c(nG);
@@ -311,7 +368,16 @@ std::vector<long> chart_levels(const AxisChartOrder& order, const PoissonStep& p
   for (int g = 0; g < nG; ++g) c[g] = ps.y[ps.nFree + g], k[g] = std::lround(c[g] / h);
   for (auto& o : order.ordered)
     if (o.sign * (c[o.q] - c[o.p]) <= 0) ++st.flipped_chart_orders;
-  const OrderAcceptance acc = accept_orders(order.ordered, nG);
+  OrderAcceptance acc = accept_orders(order.ordered, nG);
+  // a feature line between two a-charts of opposite faces gets a level between them: they go 2 levels apart
+  for (const LineFlanks& f : flanks) {
+    if (f.lo < 0) continue;
+    const auto& up = acc.up[size_t(f.lo)];
+    const auto it = std::find(up.begin(), up.end(), f.hi);
+    if (it == up.end()) continue;  // no accepted order between them to widen
+    acc.gap[size_t(f.lo)][size_t(it - up.begin())] = 2;
+    ++st.feature_lines_given_room;
+  }
   st.order_constraints_dropped += int(acc.dropped.size());
   if (in.p.level_placement == LevelPlacement::balanced) {
     std::vector<double> target(nG), weight(nG);
@@ -442,20 +508,39 @@ void final_mvc(const PoissonStep& ps, const AxisInputs& in, const std::vector<in
 
 /// The levels of the feature lines across axis a (feature_lines.h): the rounded mean of their vertices'
 /// Poisson values, unless that is the level of an a-chart beside the line's chart (the line would lie on the
-/// chart's edge). Returns per vertex its pinned value (NaN: free) and appends the pinned vertices.
+/// chart's edge). A line whose flanks were given room (line_flanks, chart_levels) takes a level strictly between
+/// them, clear of the a-charts near it, and its vertices within kCrossingFree hex edges of another line stay free.
+/// Returns per vertex its pinned value (NaN: free) and appends the pinned vertices.
 std::vector<double> feature_line_pins(int a, const AxisInputs& in, const AxisChartOrder& order, const PoissonStep& ps,
-                                      const std::vector<long>& k, std::vector<int>& pinned, PositionDeformStats& st) {
+                                      const std::vector<long>& k, const std::vector<LineFlanks>& flanks,
+                                      std::vector<int>& pinned, PositionDeformStats& st) {
   std::vector<double> pin(in.input.V.rows(), std::numeric_limits<double>::quiet_NaN());
-  for (const FeatureLine& line : in.lines) {
+  for (size_t i = 0; i < in.lines.size(); ++i) {
+    const FeatureLine& line = in.lines[i];
     if (line.axis != a) continue;
     double mean = 0;
     for (int v : line.vertices) mean += ps.y[ps.var[v]];
-    const long level = std::lround(mean / double(line.vertices.size()) / in.h);
+    long level = std::lround(mean / double(line.vertices.size()) / in.h);
+    const LineFlanks& f = flanks[i];
+    const bool room = f.lo >= 0 && k[size_t(f.hi)] - k[size_t(f.lo)] >= 2;
     bool clash = false;
-    for (int nb : in.chart_neighbours[size_t(line.chart)])
-      clash = clash || (label_axis(in.chart_label[size_t(nb)]) == a && k[order.chart_group[nb]] == level);
+    if (room) {  // between its flanks, clear of the a-charts near it
+      level = std::clamp(level, k[size_t(f.lo)] + 1, k[size_t(f.hi)] - 1);
+      for (int ch : f.charts) clash = clash || k[size_t(order.chart_group[size_t(ch)])] == level;
+    } else {
+      for (int nb : in.chart_neighbours[size_t(line.chart)])
+        clash = clash || (label_axis(in.chart_label[size_t(nb)]) == a && k[order.chart_group[nb]] == level);
+    }
     if (clash) continue;
-    for (int v : line.vertices) pin[size_t(v)] = double(level) * in.h, pinned.push_back(v);
+    for (int v : line.vertices) {
+      // a line given room stays free within kCrossingFree hex edges of another line: where two slots cross, both
+      // bottoms pinned up to the crossing leave its hexes no room (8-connected: 0.316 against 0.612 so)
+      bool near_other = false;
+      for (size_t j = 0; room && j < in.lines.size() && !near_other; ++j)
+        for (size_t x = 0; j != i && x < in.lines[j].vertices.size() && !near_other; ++x)
+          near_other = (in.input.V.row(v) - in.input.V.row(in.lines[j].vertices[x])).norm() < kCrossingFree * in.h;
+      if (!near_other) pin[size_t(v)] = double(level) * in.h, pinned.push_back(v);
+    }
     ++st.feature_lines_pinned;
   }
   return pin;
@@ -500,9 +585,10 @@ AxisLevels axis_levels(int a, const AxisInputs& in, PolyCubeMap& out, PositionDe
   st.poisson_cg_axes += lv.ps.iterative ? 1 : 0;
   st.seconds_poisson += seconds_since(t0);
 
-  lv.k = chart_levels(lv.order, lv.ps, in, st);
+  const std::vector<LineFlanks> flanks = line_flanks(a, in, lv.order, lv.ps);
+  lv.k = chart_levels(lv.order, lv.ps, in, flanks, st);
   for (int ch : axis_charts) out.chart_plane[ch] = int(lv.k[lv.order.chart_group[ch]]);
-  lv.pin = feature_line_pins(a, in, lv.order, lv.ps, lv.k, pinned, st);
+  lv.pin = feature_line_pins(a, in, lv.order, lv.ps, lv.k, flanks, pinned, st);
   return lv;
 }
 

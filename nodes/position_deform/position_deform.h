@@ -87,6 +87,11 @@ struct PositionDeformParams {
   double max_hexes = 2e7;     ///< refuse up front when the hex count estimate (volume / h³) exceeds this, [1e3, 2e9]
   bool feature_lines = true;  ///< creases inside a chart, straight along an axis of its plane, go onto lattice lines
                               ///< (feature_lines.h; step 4)
+  bool feature_line_room = false;  ///< a feature line between two charts of its axis that face opposite ways (a
+                                   ///< V-shaped slot's bottom, a thin fin's edge) gets a level between them: their
+                                   ///< order asks for 2 levels instead of 1 (step 3). Off by default: a slot's bottom
+                                   ///< then has two hexes around it, and kept on it they span half of 337 degrees
+                                   ///< each (8-connected turned: 0.644 -> 0.195; docs/features.md)
 };
 
 struct PositionDeformStats {
@@ -108,9 +113,10 @@ struct PositionDeformStats {
   double planarity_error = 0;    ///< max distance of a chart vertex from its plane / bbox diagonal (0 by construction)
   int feature_lines = 0;         ///< creases inside a chart that can be lattice lines (feature_lines.h)
   int feature_lines_pinned = 0;  ///< ... pinned at a level (not on the level of a chart beside theirs)
-  int final_iterations = 0;      ///< BiCGSTAB iterations of the mvc_laplace final solves (three axes)
-  int final_ilu_axes = 0;        ///< axes whose final solve used the incomplete LU preconditioner
-  int poisson_cg_axes = 0;       ///< axes whose Poisson step was solved by conjugate gradients (poisson_direct_max)
+  int feature_lines_given_room = 0;  ///< ... whose flanking charts were put 2 levels apart (feature_line_room)
+  int final_iterations = 0;          ///< BiCGSTAB iterations of the mvc_laplace final solves (three axes)
+  int final_ilu_axes = 0;            ///< axes whose final solve used the incomplete LU preconditioner
+  int poisson_cg_axes = 0;           ///< axes whose Poisson step was solved by conjugate gradients (poisson_direct_max)
   double seconds_poisson = 0, seconds_final = 0;  ///< summed over the three axes (which run in parallel)
 
   /// Report names, and how the three axes' figures merge (runtime/stat_fields.h).
@@ -128,6 +134,7 @@ struct PositionDeformStats {
         stat("distortion_p99", &S::distortion_p99), stat("distortion_max", &S::distortion_max),
         stat("planarity_error", &S::planarity_error, Combine::max), stat("feature_lines", &S::feature_lines),
         stat("feature_lines_pinned", &S::feature_lines_pinned, Combine::sum),
+        stat("feature_lines_given_room", &S::feature_lines_given_room, Combine::sum),
         stat("final_iterations", &S::final_iterations, Combine::sum),
         stat("final_ilu_axes", &S::final_ilu_axes, Combine::sum),
         stat("poisson_cg_axes", &S::poisson_cg_axes, Combine::sum),

@@ -105,6 +105,16 @@ TEST_CASE("place_levels keeps every order one level apart and moves the groups l
     // the other way round, the light group is the lower one: x = (-0.6, 0.4) -> (-1, 0)
     CHECK(place_levels(acc, {0.0, 0.2}, {1, 3}) == std::vector<long>{-1, 0});
   }
+  SECTION("an order that asks for 2 levels gets them, in the placement and in the push") {
+    OrderAcceptance acc = chain_orders({{0, 1}, {1, 2}}, 3);
+    REQUIRE(acc.gap[0] == std::vector<int>{1});  // accept_orders asks for 1 level per order
+    acc.gap[0][0] = 2;                           // 0 -> 1 asks for 2
+    // x = t + (-λ/3, λ) on 0 -> 1 with x_1 - x_0 = 2: λ = 1.35, (-0.05, 1.95) from (0.4, 0.6); 1 -> 2 holds
+    CHECK(place_levels(acc, {0.4, 0.6, 3.4}, {3, 1, 1}) == std::vector<long>{0, 2, 3});
+    std::vector<long> k{0, 0, 0};
+    push_levels(acc, k);
+    CHECK(k == std::vector<long>{0, 2, 3});
+  }
   SECTION("orders that hold with room leave the plain rounding") {
     OrderAcceptance acc = chain_orders({{0, 1}, {1, 2}}, 3);
     CHECK(place_levels(acc, {0.3, 2.4, 5.6}, {1, 1, 1}) == std::vector<long>{0, 2, 6});
