@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <fstream>
 #include <functional>
 #include <vector>
 
@@ -26,11 +27,12 @@ struct Meshed {
   double h = 0;  ///< the hex edge, absolute (the quality node's median boundary edge)
 };
 
-Meshed mesh_shape(const std::string& shape, double hex_edge, const std::string& extra = "") {
-  const fs::path out = test::fresh_dir("sharp_" + shape);
-  const auto r = test::run_polyhex(
-      "run " + std::string(POLYHEX_SOURCE_DIR) + "/configs/default.json -i shape:" + shape + " --hex-edge " +
-      std::to_string(hex_edge) + " --threads 2 --no-cache --out " + out.string() + (extra.empty() ? "" : " " + extra));
+/// Meshes `input` (a built-in `shape:NAME` or a file) with the default config; `tag` names the output folder.
+Meshed mesh_input(const std::string& input, const std::string& tag, double hex_edge, const std::string& extra = "") {
+  const fs::path out = test::fresh_dir("sharp_" + tag);
+  const auto r = test::run_polyhex("run " + std::string(POLYHEX_SOURCE_DIR) + "/configs/default.json -i " + input +
+                                   " --hex-edge " + std::to_string(hex_edge) + " --threads 2 --no-cache --out " +
+                                   out.string() + (extra.empty() ? "" : " " + extra));
   INFO(r.out);
   REQUIRE(r.code == 0);
   Meshed m;
@@ -38,6 +40,10 @@ Meshed mesh_shape(const std::string& shape, double hex_edge, const std::string& 
   m.mesh = read_hexmesh(out / "hex.vtk");
   m.h = m.quality["hex_edge"].get<double>() * m.quality["bbox_diag"].get<double>();
   return m;
+}
+
+Meshed mesh_shape(const std::string& shape, double hex_edge, const std::string& extra = "") {
+  return mesh_input("shape:" + shape, shape, hex_edge, extra);
 }
 
 /// The largest distance from the points of the polyline a -> b (every h / 100) where `keep` holds to the hex
@@ -143,4 +149,44 @@ TEST_CASE("sharp features: a ring whose top climbs and drops by a step keeps the
   // without the order-cycle cuts the step is flattened: the hex boundary stands about a hex edge off it
   const Meshed flat = mesh_shape("stepped_ring", 0.025, "--set segment.split_order_cycles=false");
   CHECK(flat.quality["hausdorff_max"].get<double>() > 0.8 * flat.quality["hex_edge"].get<double>());
+}
+
+TEST_CASE("sharp features: a V-shaped slot's bottom is reached with polycube.feature_line_room, filled without",
+          "[features][cli]") {
+  // a block 1 x 0.6 x 0.5 with a slot cut along y from its top, walls from x = 0.45 / 0.55 at z = 0.5 down to the
+  // bottom edge x = 0.5, z = 0.25 (they meet at 22.6 degrees), narrower than a hex edge for its last 3 h
+  const fs::path dir = test::fresh_dir("sharp_v_slot_input");
+  {
+    const double P[7][2] = {{0, 0}, {1, 0}, {1, 0.5}, {0.55, 0.5}, {0.5, 0.25}, {0.45, 0.5}, {0, 0.5}};  // (x, z)
+    std::string obj;
+    for (double y : {0.0, 0.6})
+      for (const auto& p : P)
+        obj += "v " + std::to_string(p[0]) + " " + std::to_string(y) + " " + std::to_string(p[1]) + "\n";
+    auto f = [&](int a, int b, int c) {
+      obj += "f " + std::to_string(a + 1) + " " + std::to_string(b + 1) + " " + std::to_string(c + 1) + "\n";
+    };
+    for (int i : {5, 6, 0, 1, 2}) {  // the caps, fans from the slot's bottom vertex
+      const int j = i == 6 ? 0 : i + 1;
+      f(4, j, i);
+      f(11, 7 + i, 7 + j);
+    }
+    for (int i = 0; i < 7; ++i) {
+      const int j = (i + 1) % 7;
+      f(i, j, 7 + j);
+      f(i, 7 + j, 7 + i);
+    }
+    std::ofstream(dir / "v_slot.obj") << obj;
+  }
+  const std::string input = (dir / "v_slot.obj").string();
+  const Meshed room = mesh_input(input, "v_slot_room", 0.02, "--set polycube.feature_line_room=true");
+  CHECK(room.quality["inverted"] == 0);
+  CHECK(room.quality["sj_min"].get<double>() > 0.5);  // 0.633 on 2026-12-07
+  // the bottom edge, away from the ends, near the hex boundary's edges (0.24 h Hausdorff max on 2026-12-07)
+  auto middle = [&](const Eigen::Vector3d& p) { return p.y() > room.h && p.y() < 0.6 - room.h; };
+  CHECK(line_to_edges(room.mesh, {0.5, 0, 0.25}, {0.5, 0.6, 0.25}, room.h, middle) <= 0.5 * room.h);
+  CHECK(room.quality["hausdorff_max"].get<double>() <= 0.5 * room.quality["hex_edge"].get<double>());
+  // the default fills the slot's bottom: the boundary bridges it about 2 hex edges above the edge
+  const Meshed filled = mesh_input(input, "v_slot_default", 0.02);
+  CHECK(filled.quality["inverted"] == 0);
+  CHECK(filled.quality["hausdorff_max"].get<double>() > filled.quality["hex_edge"].get<double>());
 }
