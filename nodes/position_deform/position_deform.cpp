@@ -298,17 +298,18 @@ PoissonStep poisson_step(const AxisInputs& in, const AxisChartOrder& order, cons
   return ps;
 }
 
-/// The two a-charts beside a feature line of axis a that stand on either side of it and face opposite ways: the
-/// walls of a V-shaped slot whose bottom the line is (+a below, -a above) or the faces of a thin fin whose edge it
-/// is (-a below, +a above). Rounded one level apart, they leave no lattice line between them for the crease.
+/// The two a-charts beside a feature line of axis a that stand on either side of it facing each other: the walls of
+/// a V-shaped slot whose bottom the line is (+a below, -a above). Rounded one level apart, they leave no lattice
+/// line between them for the crease. (The faces of a thin fin, -a below and +a above, were tried too: carter's
+/// ribs and girl's fingers, 1.3-5 hex edges thick, got room and every figure fell, docs/features.md.)
 struct LineFlanks {
   int lo = -1, hi = -1;     ///< their chart groups, below and above the line (-1: the line has no such pair)
   std::vector<int> charts;  ///< the a-charts within two edges of the line's vertices
 };
 
 /// Per feature line (in.lines), its flanks on axis a from the Poisson step's values: among the a-charts within
-/// two edges of its vertices, the nearest below the mean of its vertices and the nearest above, if they face
-/// opposite ways. (The line's chart may border other a-charts far from the line: a slot's floor that runs on
+/// two edges of its vertices, the nearest below the mean of its vertices and the nearest above, if they are a
+/// slot's walls (+a below, -a above). (The line's chart may border other a-charts far from the line: a slot's floor that runs on
 /// past a crossing slot.)
 std::vector<LineFlanks> line_flanks(int a, const AxisInputs& in, const AxisChartOrder& order, const PoissonStep& ps) {
   std::vector<LineFlanks> out(in.lines.size());
@@ -348,7 +349,7 @@ std::vector<LineFlanks> line_flanks(int a, const AxisInputs& in, const AxisChart
       if (c < mean && c > below) below = c, lo = g, lo_sign = label_sign(in.chart_label[size_t(ch)]);
       if (c > mean && c < above) above = c, hi = g, hi_sign = label_sign(in.chart_label[size_t(ch)]);
     }
-    if (lo >= 0 && hi >= 0 && lo != hi && lo_sign == -hi_sign) out[i].lo = lo, out[i].hi = hi;
+    if (lo >= 0 && hi >= 0 && lo != hi && lo_sign == 1 && hi_sign == -1) out[i].lo = lo, out[i].hi = hi;
   }
   return out;
 }

@@ -87,8 +87,8 @@ struct PositionDeformParams {
   double max_hexes = 2e7;     ///< refuse up front when the hex count estimate (volume / h³) exceeds this, [1e3, 2e9]
   bool feature_lines = true;  ///< creases inside a chart, straight along an axis of its plane, go onto lattice lines
                               ///< (feature_lines.h; step 4)
-  bool feature_line_room = false;  ///< a feature line between two charts of its axis that face opposite ways (a
-                                   ///< V-shaped slot's bottom, a thin fin's edge) gets a level between them: their
+  bool feature_line_room = false;  ///< a feature line between two charts of its axis that face each other (a
+                                   ///< V-shaped slot's bottom between its walls) gets a level between them: their
                                    ///< order asks for 2 levels instead of 1 (step 3). Off by default: a slot's bottom
                                    ///< then has two hexes around it, and kept on it they span half of 337 degrees
                                    ///< each (8-connected turned: 0.644 -> 0.195; docs/features.md)

@@ -57,8 +57,8 @@ const bool registered = register_node(
             .add("feature_lines", &P::feature_lines,
                  "creases inside a chart, straight along an axis of its plane, are put on lattice lines")
             .add("feature_line_room", &P::feature_line_room,
-                 "a feature line between two charts of its axis facing opposite ways (a V-slot's bottom, a thin "
-                 "fin's edge) gets a level between them: the two are put 2 levels apart (off by default)"),
+                 "a feature line between two charts of its axis facing each other (a V-slot's bottom between its "
+                 "walls) gets a level between them: the two are put 2 levels apart (off by default)"),
         {{"tets", artefact_name<TetMesh>()},
          {"deformed", artefact_name<TetMesh>()},
          {"segmentation", artefact_name<PolyCubeSegmentation>()}},
