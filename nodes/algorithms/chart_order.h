@@ -108,8 +108,8 @@ OrderAcceptance accept_orders(const std::vector<OrderedPair>& ordered, int group
 ///   min Σ_g w_g (x_g − t_g)²  subject to  x_hi − x_lo ≥ gap for every accepted order lo -> hi,
 /// solved by dual coordinate ascent (Hildreth's method: one multiplier per order, each step projects onto
 /// one constraint; exact for this convex quadratic program), then rounded to the nearest integers (rounding
-/// is monotone, so every gap of at least 1 stays at least 1) and, as a safeguard when the ascent stopped at
-/// its sweep cap, pushed up along the accepted orders (longest path) until each holds.
+/// is monotone and the gaps are integers, so every gap holds after it) and, as a safeguard when the ascent
+/// stopped at its sweep cap, pushed up along the accepted orders (longest path) until each holds.
 /// Why not only the push: pushing every group up to one level above the groups below it keeps the lowest
 /// groups in place and lets a stack of small, nearly level charts carry the shift upwards: on femur a chain
 /// of ten charts of 12-176 vertices, read from orders of 0.5-1 hex edges, pushed a chart 5.2 hex edges and a
@@ -124,8 +124,9 @@ OrderAcceptance accept_orders(const std::vector<OrderedPair>& ordered, int group
 std::vector<long> place_levels(const OrderAcceptance& accepted, const std::vector<double>& target,
                                const std::vector<double>& weight, int max_sweeps = 20000);
 
-/// Pushes every group up to at least its order's gap (1 or more) above each group below it in the accepted orders, in
-/// topological order (a longest-path pass from the given levels): afterwards every accepted order holds.
+/// Pushes every group up to at least its order's gap (1 or more) above each group below it in the accepted
+/// orders, in topological order (a longest-path pass from the given levels): afterwards every accepted order
+/// holds.
 /// \pre k.size() == accepted.up.size()
 /// \throw std::invalid_argument on a size mismatch or a cycle in the accepted orders
 void push_levels(const OrderAcceptance& accepted, std::vector<long>& k);

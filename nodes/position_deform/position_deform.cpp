@@ -309,8 +309,8 @@ struct LineFlanks {
 
 /// Per feature line (in.lines), its flanks on axis a from the Poisson step's values: among the a-charts within
 /// two edges of its vertices, the nearest below the mean of its vertices and the nearest above, if they are a
-/// slot's walls (+a below, -a above). (The line's chart may border other a-charts far from the line: a slot's floor that runs on
-/// past a crossing slot.)
+/// slot's walls (+a below, -a above). (The line's chart may border other a-charts far from the line: a slot's floor
+/// that runs on past a crossing slot.)
 std::vector<LineFlanks> line_flanks(int a, const AxisInputs& in, const AxisChartOrder& order, const PoissonStep& ps) {
   std::vector<LineFlanks> out(in.lines.size());
   if (!in.p.feature_line_room) return out;

@@ -90,8 +90,8 @@ struct PositionDeformParams {
   bool feature_line_room = false;  ///< a feature line between two charts of its axis that face each other (a
                                    ///< V-shaped slot's bottom between its walls) gets a level between them: their
                                    ///< order asks for 2 levels instead of 1 (step 3). Off by default: a slot's bottom
-                                   ///< then has two hexes around it, and kept on it they span half of 337 degrees
-                                   ///< each (8-connected turned: 0.644 -> 0.195; docs/features.md)
+                                   ///< then has two hexes around it, each spanning about half of 337 degrees
+                                   ///< (8-connected turned: 0.644 -> 0.195; docs/features.md)
 };
 
 struct PositionDeformStats {
