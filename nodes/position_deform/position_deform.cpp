@@ -370,7 +370,7 @@ std::vector<long> chart_levels(const AxisChartOrder& order, const PoissonStep& p
   for (auto& o : order.ordered)
     if (o.sign * (c[o.q] - c[o.p]) <= 0) ++st.flipped_chart_orders;
   OrderAcceptance acc = accept_orders(order.ordered, nG);
-  // a feature line between two a-charts of opposite faces gets a level between them: they go 2 levels apart
+  // a feature line between a slot's two walls (line_flanks) gets a level between them: they go 2 levels apart
   for (const LineFlanks& f : flanks) {
     if (f.lo < 0) continue;
     const auto& up = acc.up[size_t(f.lo)];
