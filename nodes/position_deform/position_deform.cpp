@@ -35,6 +35,10 @@ using Clock = std::chrono::steady_clock;
 constexpr double kFeatureLineLength = 4.0;
 /// A feature line given room between its flanks stays free within this many hex edges of another feature line.
 constexpr double kCrossingFree = 2.0;
+/// lattice_spacing input_volume: the Poisson step's volume ratio is taken within [this, 1 / this], so that a map
+/// that has folded onto itself (a ratio near 0 or negative) cannot ask for a lattice of more than 8 times the
+/// cells of the requested size.
+constexpr double kMinVolumeRatio = 0.125;
 
 /// Mean value coordinates of point x w.r.t. the triangle (p1,p2,p3) of a closed star polyhedron around x
 /// (Ju, Schaefer, Warren 2005, as used by [FKR05] for the 3D Laplacian). Adds to w[0..2].
@@ -102,6 +106,7 @@ struct AxisInputs {
   std::vector<std::vector<std::pair<int, double>>> vol_w;
   std::vector<FeatureLine> lines;  ///< creases inside a chart to put on lattice lines (feature_lines.h)
   double diag = 0, h = 0, min_d = 0, sigma = 0;
+  double lattice = 0;  ///< the lattice spacing on the PolyCube (step 3 of the header): h or h scaled to the volume
 };
 
 /// \throw InvalidInput for a deformed mesh of other connectivity or a malformed segmentation
@@ -121,15 +126,19 @@ void check_inputs(const TetMesh& input, const TetMesh& deformed, const PolyCubeS
   }
 }
 
+/// The signed volume of tets T on the vertices V, summed in tet order (the same sum for any thread count).
+double signed_volume(const RowMatrixX3d& V, const RowMatrixX4i& T) {
+  double volume = 0;
+  for (Eigen::Index t = 0; t < T.rows(); ++t) {
+    const Eigen::Vector3d a = V.row(T(t, 0)), b = V.row(T(t, 1)), c = V.row(T(t, 2)), d = V.row(T(t, 3));
+    volume += (b - a).cross(c - a).dot(d - a) / 6.0;
+  }
+  return volume;
+}
+
 /// Refuses a hex edge length the machine cannot afford before any work: the lattice gives about
 /// volume / h³ hexes. \throw InvalidInput above p.max_hexes
-void check_budget(const TetMesh& input, const PositionDeformParams& p, double h) {
-  double volume = 0;
-  for (Eigen::Index t = 0; t < input.T.rows(); ++t) {
-    const Eigen::Vector3d a = input.V.row(input.T(t, 0)), b = input.V.row(input.T(t, 1)),
-                          c = input.V.row(input.T(t, 2)), d = input.V.row(input.T(t, 3));
-    volume += std::abs((b - a).cross(c - a).dot(d - a)) / 6.0;
-  }
+void check_budget(double volume, const std::string& source, const PositionDeformParams& p, double h) {
   const double estimate = volume / (h * h * h);
   if (estimate > p.max_hexes) {
     char msg[320];
@@ -137,7 +146,7 @@ void check_budget(const TetMesh& input, const PositionDeformParams& p, double h)
                   ": refused: edge_length %g would give about %.3g hexes (volume / h^3), more than max_hexes = %.3g; "
                   "use edge_length >= %.3g or raise max_hexes",
                   p.edge_length, estimate, p.max_hexes, p.edge_length * std::cbrt(estimate / p.max_hexes));
-    throw InvalidInput(input.source + msg);
+    throw InvalidInput(source + msg);
   }
 }
 
@@ -363,7 +372,7 @@ std::vector<LineFlanks> line_flanks(int a, const AxisInputs& in, const AxisChart
 std::vector<long> chart_levels(const AxisChartOrder& order, const PoissonStep& ps, const AxisInputs& in,
                                const std::vector<LineFlanks>& flanks, PositionDeformStats& st) {
   const int nG = order.groups;
-  const double h = in.h;
+  const double h = in.lattice;
   std::vector<double> c(nG);
   std::vector<long> k(nG);
   for (int g = 0; g < nG; ++g) c[g] = ps.y[ps.nFree + g], k[g] = std::lround(c[g] / h);
@@ -400,7 +409,7 @@ std::vector<long> chart_levels(const AxisChartOrder& order, const PoissonStep& p
 void final_poisson(const PoissonStep& ps, const std::vector<long>& k, const AxisInputs& in,
                    const std::vector<int>& vgroup, const std::vector<double>& pin, Eigen::VectorXd& u) {
   const int nFree = ps.nFree, nV = int(u.size());
-  const double h = in.h;
+  const double h = in.lattice;
   std::vector<Eigen::Triplet<double>> tf;
   Eigen::VectorXd b = ps.rhs.head(nFree);
   for (int col = 0; col < ps.A.outerSize(); ++col)
@@ -521,7 +530,7 @@ std::vector<double> feature_line_pins(int a, const AxisInputs& in, const AxisCha
     if (line.axis != a) continue;
     double mean = 0;
     for (int v : line.vertices) mean += ps.y[ps.var[v]];
-    long level = std::lround(mean / double(line.vertices.size()) / in.h);
+    long level = std::lround(mean / double(line.vertices.size()) / in.lattice);
     const LineFlanks& f = flanks[i];
     const bool room = f.lo >= 0 && k[size_t(f.hi)] - k[size_t(f.lo)] >= 2;
     bool clash = false;
@@ -540,7 +549,7 @@ std::vector<double> feature_line_pins(int a, const AxisInputs& in, const AxisCha
       for (size_t j = 0; room && j < in.lines.size() && !near_other; ++j)
         for (size_t x = 0; j != i && x < in.lines[j].vertices.size() && !near_other; ++x)
           near_other = (in.input.V.row(v) - in.input.V.row(in.lines[j].vertices[x])).norm() < kCrossingFree * in.h;
-      if (!near_other) pin[size_t(v)] = double(level) * in.h, pinned.push_back(v);
+      if (!near_other) pin[size_t(v)] = double(level) * in.lattice, pinned.push_back(v);
     }
     ++st.feature_lines_pinned;
   }
@@ -559,10 +568,8 @@ struct AxisLevels {
   std::vector<double> pin;  ///< per vertex: the feature line level it is pinned to (NaN: free)
 };
 
-/// Steps 1-3 of axis a: the order evidence, the Poisson step, the chart planes (written to
-/// out.chart_plane for the a-charts) and the feature lines' levels.
-AxisLevels axis_levels(int a, const AxisInputs& in, PolyCubeMap& out, PositionDeformStats& st,
-                       std::vector<int>& pinned) {
+/// Steps 1-2 of axis a: the order evidence and the Poisson step.
+AxisLevels axis_poisson(int a, const AxisInputs& in, PositionDeformStats& st) {
   throw_if_interrupted();  // safe point: per axis
   const int nC = int(in.seg.charts.size());
   const double h = in.h;
@@ -585,12 +592,19 @@ AxisLevels axis_levels(int a, const AxisInputs& in, PolyCubeMap& out, PositionDe
   lv.ps = poisson_step(in, lv.order, dpairs, a);
   st.poisson_cg_axes += lv.ps.iterative ? 1 : 0;
   st.seconds_poisson += seconds_since(t0);
+  return lv;
+}
 
+/// Step 3 of axis a, at the lattice spacing in.lattice: the chart planes (written to out.chart_plane for the
+/// a-charts) and the feature lines' levels, into lv.
+void axis_levels(int a, const AxisInputs& in, AxisLevels& lv, PolyCubeMap& out, PositionDeformStats& st,
+                 std::vector<int>& pinned) {
   const std::vector<LineFlanks> flanks = line_flanks(a, in, lv.order, lv.ps);
   lv.k = chart_levels(lv.order, lv.ps, in, flanks, st);
-  for (int ch : axis_charts) out.chart_plane[ch] = int(lv.k[lv.order.chart_group[ch]]);
+  for (int ch = 0; ch < int(in.seg.charts.size()); ++ch)
+    if (label_axis(in.seg.charts[size_t(ch)].label) == a)
+      out.chart_plane[ch] = int(lv.k[size_t(lv.order.chart_group[size_t(ch)])]);
   lv.pin = feature_line_pins(a, in, lv.order, lv.ps, lv.k, flanks, pinned, st);
-  return lv;
 }
 
 /// Step 4 of axis a: the final solve with the chart planes pinned, into out.U.col(a).
@@ -601,7 +615,7 @@ void axis_final(int a, const AxisInputs& in, const AxisLevels& lv, PolyCubeMap& 
   const std::vector<int>& vgroup = lv.order.vertex_group;
   Eigen::VectorXd u(nV);
   for (int v = 0; v < nV; ++v)
-    if (vgroup[v] >= 0) u[v] = lv.k[vgroup[v]] * in.h;
+    if (vgroup[v] >= 0) u[v] = lv.k[vgroup[v]] * in.lattice;
   if (lv.ps.nFree > 0) {
     if (in.p.final_solve == FinalSolve::poisson)
       final_poisson(lv.ps, lv.k, in, vgroup, lv.pin, u);
@@ -613,7 +627,7 @@ void axis_final(int a, const AxisInputs& in, const AxisLevels& lv, PolyCubeMap& 
   // Planarity: exact by substitution; measured anyway.
   for (int v = 0; v < nV; ++v)
     if (vgroup[v] >= 0)
-      st.planarity_error = std::max(st.planarity_error, std::abs(out.U(v, a) - lv.k[vgroup[v]] * in.h) / in.diag);
+      st.planarity_error = std::max(st.planarity_error, std::abs(out.U(v, a) - lv.k[vgroup[v]] * in.lattice) / in.diag);
 }
 
 /// The per-axis statistics merged into st, in axis order, by their declared rules.
@@ -690,7 +704,8 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
   st.charts = int(seg.charts.size());
   const double diag = reference_length(input.V);
   const double h = p.edge_length * diag;
-  check_budget(input, p, h);
+  const double input_volume = signed_volume(input.V, input.T);
+  check_budget(input_volume, input.source, p, h);
   const TetEdgeGraph graph(input.T, int(input.V.rows()));
   AxisInputs in{input, deformed.V, seg, p, graph, {}, {}, {}, {}, {}, {}, {}};
   in.diag = diag;
@@ -707,19 +722,35 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
   PolyCubeMap out;
   out.input = input_ptr;
   out.segmentation = seg_ptr;
-  out.edge_length = in.h;
   out.U.resize(input.V.rows(), 3);
   out.chart_plane = Eigen::VectorXi::Zero(st.charts);
   report(0, "chart planes, Poisson and final solves");
   std::array<PositionDeformStats, 3> axis_stats{};
   std::array<std::vector<int>, 3> pinned;  // per axis: the feature lines' vertices pinned on it
   std::array<AxisLevels, 3> levels;
-  parallel_two_phase(
-      3, [&](int a) { levels[size_t(a)] = axis_levels(a, in, out, axis_stats[size_t(a)], pinned[size_t(a)]); },
-      [&](int a) {
-        axis_final(a, in, levels[size_t(a)], out, axis_stats[size_t(a)]);
-        levels[size_t(a)] = AxisLevels{};  // its systems are no longer needed
-      });
+  RowMatrixX3d poisson_U(input.V.rows(), 3);  // the Poisson step's map, for its volume
+  auto poisson = [&](int a) {
+    AxisLevels& lv = levels[size_t(a)];
+    lv = axis_poisson(a, in, axis_stats[size_t(a)]);
+    for (Eigen::Index v = 0; v < input.V.rows(); ++v) poisson_U(v, a) = lv.ps.y[lv.ps.var[size_t(v)]];
+  };
+  auto levels_and_final = [&](int a) {
+    axis_levels(a, in, levels[size_t(a)], out, axis_stats[size_t(a)], pinned[size_t(a)]);
+    axis_final(a, in, levels[size_t(a)], out, axis_stats[size_t(a)]);
+    levels[size_t(a)] = AxisLevels{};  // its systems are no longer needed
+  };
+  if (p.lattice_spacing == LatticeSpacing::polycube) {
+    in.lattice = h;  // known before the Poisson steps: the axes' phases overlap
+    parallel_two_phase(3, poisson, levels_and_final);
+    st.poisson_volume_ratio = signed_volume(poisson_U, input.T) / input_volume;
+  } else {  // the spacing needs the three axes' Poisson steps
+    oneapi::tbb::parallel_for(0, 3, poisson);
+    st.poisson_volume_ratio = signed_volume(poisson_U, input.T) / input_volume;
+    in.lattice = h * std::cbrt(std::clamp(st.poisson_volume_ratio, kMinVolumeRatio, 1.0 / kMinVolumeRatio));
+    oneapi::tbb::parallel_for(0, 3, levels_and_final);
+  }
+  st.lattice_spacing_ratio = in.lattice / h;
+  out.edge_length = in.lattice;
   merge_axes(axis_stats, st);
   if (p.untangle_iterations > 0) {
     report(0.35, "untangling the map");
@@ -727,6 +758,7 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
   }
   report(0.97, "distortion");
   measure_distortion(input, out.U, p, st);
+  st.volume_ratio = signed_volume(out.U, input.T) / input_volume;
   if (stats_out) *stats_out = st;
   return out;
 }

@@ -17,14 +17,19 @@
 ///     exponent without its minus sign; a weight that grows with distance would contradict its "sharp
 ///     falloff", so we read it as the usual Gaussian. s = `distance_weight` × (vertices of the smaller of
 ///     the two charts), so that the constraint is as stiff as the chart it holds.
-///  3. Chart coordinates are rounded to integers in units of h. Rounding must not swap or merge two
-///     same-axis charts that are ordered (a distance pair, or the two ends of a chart of another axis
-///     that joins them): such pairs are kept at least one h apart, in their original order; a pair
-///     contradicting stronger evidence is dropped. `level_placement` "balanced" (default): the levels
-///     that move the charts least (weighted by their vertex counts) while every order holds, then rounded
-///     (chart_order.h place_levels); "push_up": rounded, then each chart pushed up to one h above the
-///     charts below it (a longest-path pass), which lets a stack of small charts carry the shift upwards.
-///     The configs retry with push_up (tools/cli_run.h); docs/position_deform.md has the measurements.
+///  3. Chart coordinates are rounded to integer levels of the lattice spacing: h (`lattice_spacing` "polycube",
+///     the paper), or h times the cube root of the Poisson step's volume over the input's ("input_volume"), so
+///     that the lattice has about input volume / h³ cells in any frame. The Poisson step loses volume where it
+///     flattens curved charts (0.43-0.78 of the input on organic models, 0.88-1.0 on most CAD parts), and how
+///     much depends on the frame: on the paper's spacing two frames of one model can give hex counts 25-40 %
+///     apart, and an organic model's hexes are 1.1-1.3 h across (docs/position_deform.md). Rounding must not
+///     swap or merge two same-axis charts that are ordered (a distance pair, or the two ends of a chart of
+///     another axis that joins them): such pairs are kept at least one level apart, in their original order; a
+///     pair contradicting stronger evidence is dropped. `level_placement` "balanced" (default): the levels that
+///     move the charts least (weighted by their vertex counts) while every order holds, then rounded
+///     (chart_order.h place_levels); "push_up": rounded, then each chart pushed up to one level above the charts
+///     below it (a longest-path pass), which lets a stack of small charts carry the shift upwards. The configs
+///     retry with push_up (tools/cli_run.h); docs/position_deform.md has the measurements.
 ///  4. Final solve with the rounded chart coordinates pinned, and (beyond the paper, `feature_lines`) the
 ///     creases that run inside a chart straight along an axis of its plane at the rounded mean of their
 ///     other in-plane coordinate, so that the lattice has a line on them (feature_lines.h): `final_solve` =
@@ -55,10 +60,16 @@ enum class FinalSolve { mvc_laplace, poisson };
 enum class LevelPlacement { balanced, push_up };
 /// What the polish after the untangling covers (step 5).
 enum class MapPolish { region, everywhere };
+/// What the lattice's spacing is measured against (step 3).
+enum class LatticeSpacing { polycube, input_volume };
 
 struct PositionDeformParams {
-  double edge_length = 0.01;     ///< hex edge length h, fraction of the input's reference length
-                                 ///< (nodes/algorithms/reference_length.h) (§6: 1 %), [1e-4, 0.5]
+  double edge_length = 0.01;  ///< hex edge length h, fraction of the input's reference length
+                              ///< (nodes/algorithms/reference_length.h) (§6: 1 %), [1e-4, 0.5]
+  LatticeSpacing lattice_spacing =
+      LatticeSpacing::polycube;  ///< the lattice spacing on the PolyCube: h (polycube, the paper) or h scaled by the
+                                 ///< cube root of the Poisson step's volume ratio (input_volume: about input
+                                 ///< volume / h³ lattice cells whatever the frame; step 3)
   double distance_weight = 1.0;  ///< scale s of the distance-preservation constraints (0 disables them), [0, 1e6]
   FinalSolve final_solve = FinalSolve::mvc_laplace;  ///< mvc_laplace (§5.2) or poisson
   LevelPlacement level_placement =
@@ -110,6 +121,10 @@ struct PositionDeformStats {
       0;  ///< median conformal distortion ||J||_F ||J^-1||_F / 3 (input -> PolyCube) of non-inverted tets
   double distortion_p99 = 0;  ///< its 99th percentile
   double distortion_max = 0;
+  double poisson_volume_ratio =
+      0;  ///< the Poisson step's map (charts flattened, before rounding): volume / the input's
+  double lattice_spacing_ratio = 0;  ///< the lattice spacing on the PolyCube / h (1 for lattice_spacing polycube)
+  double volume_ratio = 0;           ///< the PolyCube map's volume / the input's (signed: folds count negative)
   double planarity_error = 0;    ///< max distance of a chart vertex from its plane / bbox diagonal (0 by construction)
   int feature_lines = 0;         ///< creases inside a chart that can be lattice lines (feature_lines.h)
   int feature_lines_pinned = 0;  ///< ... pinned at a level (not on the level of a chart beside theirs)
@@ -132,6 +147,8 @@ struct PositionDeformStats {
         stat("chart_coordinates_rounded_max_shift", &S::chart_coordinates_rounded_max_shift, Combine::max),
         stat("inverted_tets", &S::inverted_tets), stat("untangle", &S::untangle), stat("distortion", &S::distortion),
         stat("distortion_p99", &S::distortion_p99), stat("distortion_max", &S::distortion_max),
+        stat("poisson_volume_ratio", &S::poisson_volume_ratio),
+        stat("lattice_spacing_ratio", &S::lattice_spacing_ratio), stat("volume_ratio", &S::volume_ratio),
         stat("planarity_error", &S::planarity_error, Combine::max), stat("feature_lines", &S::feature_lines),
         stat("feature_lines_pinned", &S::feature_lines_pinned, Combine::sum),
         stat("feature_lines_given_room", &S::feature_lines_given_room, Combine::sum),

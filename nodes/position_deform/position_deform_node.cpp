@@ -18,6 +18,11 @@ const bool registered = register_node(
         "§5.2 PolyCube map: charts onto integer planes (hex edge units), distance constraints, MVC Laplace",
         ParamSet<P>()
             .add("edge_length", &P::edge_length, "hex edge length, fraction of the input's reference length", 1e-4, 0.5)
+            .add_enum("lattice_spacing", &P::lattice_spacing,
+                      {{LatticeSpacing::polycube, "polycube"}, {LatticeSpacing::input_volume, "input_volume"}},
+                      "the lattice spacing on the PolyCube: the hex edge (polycube, the paper), or scaled by the cube "
+                      "root of the Poisson map's volume ratio so that the lattice has about input volume / h^3 cells "
+                      "(input_volume)")
             .add("distance_weight", &P::distance_weight, "scale of the same-axis chart distance constraints (0 = off)",
                  0.0, 1e6)
             .add_enum("final_solve", &P::final_solve,
@@ -77,7 +82,7 @@ const bool registered = register_node(
                      " same-axis charts share a vertex and were put on one plane");
           return make_artefact(std::move(m));
         })
-        .with_version("13"));
+        .with_version("14"));
 
 // --save-all writes the PolyCube map as the tet mesh at its PolyCube positions (<id>.polycube.vtk) and
 // the PolyCube surface with chart ids and labels as cell data (<id>.polycube_surface.vtk).

@@ -1,5 +1,6 @@
 // Position-driven deformation (§5.2): planarity, integer chart planes, chart order, analytic answers.
 #include "graph/node.h"
+#include "nodes/algorithms/reference_length.h"
 #include "nodes/algorithms/shapes.h"
 #include "nodes/polycube_segment/polycube_segment.h"
 #include "nodes/position_deform/position_deform.h"
@@ -102,6 +103,60 @@ TEST_CASE("box and L-block after the rotation stage: planar integer charts, orde
     CHECK(rl.seg->charts.size() == 8);
     check_planes(rl);
   }
+}
+
+/// The signed volume of the tets T on the vertices V.
+double tet_volume(const RowMatrixX3d& V, const RowMatrixX4i& T) {
+  double v = 0;
+  for (Eigen::Index t = 0; t < T.rows(); ++t) {
+    const Eigen::Vector3d a = V.row(T(t, 0));
+    v += (Eigen::Vector3d(V.row(T(t, 1))) - a)
+             .cross(Eigen::Vector3d(V.row(T(t, 2))) - a)
+             .dot(Eigen::Vector3d(V.row(T(t, 3))) - a) /
+         6.0;
+  }
+  return v;
+}
+
+TEST_CASE("lattice_spacing input_volume: about input volume / h^3 lattice cells in any frame", "[position]") {
+  // A torus: the Poisson step flattens its curved charts and loses a good part of its volume, more or less
+  // with the frame. On the paper's spacing the lattice then has that much fewer cells than volume / h^3; scaled
+  // by the cube root of the Poisson step's volume ratio it has about volume / h^3 in each frame.
+  ShapeParams sp;
+  sp.name = "torus";
+  sp.resolution = 32;
+  const SurfaceMesh torus = make_shape(sp);
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  SurfaceMesh turned = torus;
+  turned.V = torus.V * turn.transpose();
+  PositionDeformParams p;
+  p.edge_length = 0.04;
+  std::vector<double> cells;
+  for (const SurfaceMesh* s : std::array<const SurfaceMesh*, 2>{&torus, &turned}) {
+    p.lattice_spacing = LatticeSpacing::polycube;
+    const Run paper = run_pipeline(*s, 0.05, p);
+    const double h = p.edge_length * reference_length(paper.tets->V);
+    const double v_in = tet_volume(paper.tets->V, paper.tets->T);
+    CHECK(paper.map.edge_length == h);
+    CHECK(paper.stats.lattice_spacing_ratio == 1.0);
+    CHECK(paper.stats.poisson_volume_ratio < 0.9);  // what the option is for
+    p.lattice_spacing = LatticeSpacing::input_volume;
+    const Run r = run_pipeline(*s, 0.05, p);
+    check_planes(r);
+    CHECK(r.stats.poisson_volume_ratio == paper.stats.poisson_volume_ratio);  // the same Poisson step
+    CHECK(r.stats.lattice_spacing_ratio == Approx(std::cbrt(r.stats.poisson_volume_ratio)).epsilon(1e-12));
+    CHECK(r.map.edge_length == Approx(h * r.stats.lattice_spacing_ratio).epsilon(1e-12));
+    CHECK(r.stats.volume_ratio == Approx(tet_volume(r.map.U, r.tets->T) / v_in).epsilon(1e-9));
+    // the lattice's cells (the map's volume in lattice units) against the input's volume in hex edges
+    const double n = tet_volume(r.map.U, r.tets->T) / std::pow(r.map.edge_length, 3);
+    const double want = v_in / (h * h * h);
+    INFO("cells " << n << ", volume / h^3 " << want << ", paper's spacing "
+                  << tet_volume(paper.map.U, paper.tets->T) / (h * h * h));
+    CHECK(std::abs(n / want - 1) < 0.1);
+    CHECK(tet_volume(paper.map.U, paper.tets->T) / (h * h * h) < 0.9 * want);
+    cells.push_back(n);
+  }
+  CHECK(std::abs(cells[1] / cells[0] - 1) < 0.1);
 }
 
 TEST_CASE("the map's untangling removes folds and keeps every chart on its integer plane", "[position][untangle]") {
