@@ -271,9 +271,12 @@ TEST_CASE("position_deform saver (--save-all) writes the PolyCube tet mesh and t
 }
 
 TEST_CASE("the three axes solved in parallel give the bit-identical map of a one-thread run", "[position]") {
-  // the axes' CHOLMOD analyses (METIS, one process-wide random state) must not interleave
+  // the axes' CHOLMOD analyses (METIS, one process-wide random state) must not interleave; with lattice_spacing
+  // input_volume the three Poisson steps run side by side before any level is rounded
+  const LatticeSpacing spacing = GENERATE(LatticeSpacing::polycube, LatticeSpacing::input_volume);
   PositionDeformParams p;
   p.edge_length = 0.05;
+  p.lattice_spacing = spacing;
   SurfaceMesh l = test::voxel_surface({{0, 0, 0}, {1, 0, 0}, {0, 0, 1}, {0, 1, 0}}, 0.5);
   Run serial, parallel;
   {
@@ -292,6 +295,7 @@ TEST_CASE("the three axes solved in parallel give the bit-identical map of a one
   CHECK((serial.map.U - parallel.map.U).cwiseAbs().maxCoeff() <= 1e-12 * (serial.map.U.cwiseAbs().maxCoeff() + 1));
 #endif
   CHECK(serial.map.chart_plane == parallel.map.chart_plane);
+  CHECK(serial.map.edge_length == parallel.map.edge_length);
   CHECK(serial.stats.ordered_pairs == parallel.stats.ordered_pairs);
   CHECK(serial.stats.planarity_error == parallel.stats.planarity_error);
   check_planes(parallel);
