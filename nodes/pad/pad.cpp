@@ -689,7 +689,7 @@ HexMesh pad_boundary(const HexMesh& input, const SurfaceMesh* surface, const Pad
         pad[q] = pad[q] && !layer_hex[size_t(owner[q])];
       plan.close(pad);
       if (std::find(pad.begin(), pad.end(), 1) == pad.end()) break;
-      if (round + 1 < kMaxLayers) pad = plan.first_layer(pad);
+      if (p.split_parts && round + 1 < kMaxLayers) pad = plan.first_layer(pad);
       // where the lattice is sheared along the end, the end's inner copies cannot slide along the other side
       // without turning its hexes over: the layer takes the quads round such a vertex too, and is made again
       for (int attempt = 0;; ++attempt) {

@@ -25,6 +25,10 @@ struct PadParams {
                           ///< layer ends on convex creases
   double turn_tolerance = 30.0;  ///< degrees: a boundary edge whose lattice and surface turns differ by more needs
                                  ///< the layer on both sides (see select_padded_quads)
+  bool split_parts = true;  ///< selective: parts of the layer that meet (on a convex crease) are padded in turn, each
+                            ///< ending on the crease; false: all in one layer, sheared round such a crease (0.71).
+                            ///< Off, femur's turned copy gets one layer where a second one re-covered most of the
+                            ///< first (docs/orientation.md); not the default, the table's figures would move
 };
 
 struct PadStats {

@@ -31,7 +31,10 @@ const bool registered = register_node(
                      .add("turn_tolerance", &P::turn_tolerance,
                           "degrees: a boundary edge whose lattice and surface turns differ by more is padded on both "
                           "sides",
-                          0.0, 90.0),
+                          0.0, 90.0)
+                     .add("split_parts", &P::split_parts,
+                          "selective: parts of the layer that meet on a convex crease are padded in turn, each ending "
+                          "on it (false: one layer round the crease)"),
                  {{"hexes", artefact_name<HexMesh>()}, {"surface", artefact_name<SurfaceMesh>(), true}},
                  artefact_name<HexMesh>(),
                  [](const P& p, const Inputs& in, NodeContext& ctx) {

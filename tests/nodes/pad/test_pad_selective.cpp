@@ -135,6 +135,26 @@ TEST_CASE("selective padding: two parts meeting on a convex crease are padded in
   CHECK(hex_quality(m, nullptr).nonmanifold_boundary_edges == 0);
 }
 
+TEST_CASE("selective padding, split_parts false: the two parts in one layer, sheared round their edge", "[pad]") {
+  const HexMesh g = bumped_grid(6, {0, 1});
+  const SurfaceMesh s = test::boundary_surface(g);
+  PadParams p;
+  p.split_parts = false;
+  PadStats st;
+  const HexMesh m = pad_boundary(g, &s, p, &st);
+  CHECK(st.layers == 1);
+  CHECK(st.hexes_added == 36 + 36);  // no quad padded twice
+  CHECK(st.inverted == 0);
+  // along the shared edge one layer turns round it: its hexes there are sheared (0.71 on a straight edge), not
+  // the near boxes of two layers in turn (above, > 0.99)
+  const double sheared =
+      min_sj(m, [](const Eigen::Vector3d& c) { return c.y() < 1 && c.z() > 5 && c.x() > 1 && c.x() < 5; });
+  CHECK(sheared > 0.5);  // 0.58: the bumps tilt the edge's middle
+  CHECK(sheared < 0.8);
+  CHECK(hex_quality(m, nullptr).nonmanifold_boundary_edges == 0);
+  CHECK(hex_quality(m, nullptr).volume == Approx(hex_quality(g, nullptr).volume));
+}
+
 TEST_CASE("selective padding: every quad on a non-manifold edge is padded", "[pad]") {
   // cells (0,0,0) and (1,1,0) of a 2x2x1 grid touch along the edge x = y = 1 only: four boundary quads
   // on it. Every other edge is a box's convex edge, where the layer is not needed.
