@@ -6,6 +6,7 @@
 #include "nodes/position_deform/position_deform.h"
 #include "nodes/rotation_deform/rotation_deform.h"
 #include "nodes/tetrahedralize/tetgen.h"
+#include "tests/helpers/io_checks.h"
 #include "tests/helpers/voxel_shapes.h"
 
 #include <Eigen/Geometry>
@@ -108,13 +109,7 @@ TEST_CASE("box and L-block after the rotation stage: planar integer charts, orde
 /// The signed volume of the tets T on the vertices V.
 double tet_volume(const RowMatrixX3d& V, const RowMatrixX4i& T) {
   double v = 0;
-  for (Eigen::Index t = 0; t < T.rows(); ++t) {
-    const Eigen::Vector3d a = V.row(T(t, 0));
-    v += (Eigen::Vector3d(V.row(T(t, 1))) - a)
-             .cross(Eigen::Vector3d(V.row(T(t, 2))) - a)
-             .dot(Eigen::Vector3d(V.row(T(t, 3))) - a) /
-         6.0;
-  }
+  for (Eigen::Index t = 0; t < T.rows(); ++t) v += iotest::tet_volume(V, T.row(t));
   return v;
 }
 
