@@ -316,11 +316,25 @@ struct LineFlanks {
   std::vector<int> charts;  ///< the a-charts within two edges of the line's vertices
 };
 
+/// Per feature line of axis a (in.lines), the mean of its vertices' Poisson values (NaN for the other lines).
+std::vector<double> line_means(int a, const AxisInputs& in, const PoissonStep& ps) {
+  std::vector<double> out(in.lines.size(), std::numeric_limits<double>::quiet_NaN());
+  for (size_t i = 0; i < in.lines.size(); ++i) {
+    const FeatureLine& line = in.lines[i];
+    if (line.axis != a || line.vertices.empty()) continue;
+    double sum = 0;
+    for (int v : line.vertices) sum += ps.y[ps.var[size_t(v)]];
+    out[i] = sum / double(line.vertices.size());
+  }
+  return out;
+}
+
 /// Per feature line (in.lines), its flanks on axis a from the Poisson step's values: among the a-charts within
-/// two edges of its vertices, the nearest below the mean of its vertices and the nearest above, if they are a
-/// slot's walls (+a below, -a above). (The line's chart may border other a-charts far from the line: a slot's floor
-/// that runs on past a crossing slot.)
-std::vector<LineFlanks> line_flanks(int a, const AxisInputs& in, const AxisChartOrder& order, const PoissonStep& ps) {
+/// two edges of its vertices, the nearest below the mean of its vertices (mean, line_means) and the nearest above,
+/// if they are a slot's walls (+a below, -a above). (The line's chart may border other a-charts far from the line:
+/// a slot's floor that runs on past a crossing slot.)
+std::vector<LineFlanks> line_flanks(int a, const AxisInputs& in, const AxisChartOrder& order, const PoissonStep& ps,
+                                    const std::vector<double>& mean) {
   std::vector<LineFlanks> out(in.lines.size());
   if (!in.p.feature_line_room) return out;
   for (size_t i = 0; i < in.lines.size(); ++i) {
@@ -347,16 +361,13 @@ std::vector<LineFlanks> line_flanks(int a, const AxisInputs& in, const AxisChart
     std::vector<int>& charts = out[i].charts;
     for (const auto& [ch, n] : count)
       if (2 * n >= int(line.vertices.size())) charts.push_back(ch);
-    double mean = 0;
-    for (int v : line.vertices) mean += ps.y[ps.var[size_t(v)]];
-    mean /= double(line.vertices.size());
     double below = -std::numeric_limits<double>::infinity(), above = std::numeric_limits<double>::infinity();
     int lo = -1, hi = -1, lo_sign = 0, hi_sign = 0;
     for (int ch : charts) {
       const int g = order.chart_group[size_t(ch)];
       const double c = ps.y[ps.nFree + g];
-      if (c < mean && c > below) below = c, lo = g, lo_sign = label_sign(in.chart_label[size_t(ch)]);
-      if (c > mean && c < above) above = c, hi = g, hi_sign = label_sign(in.chart_label[size_t(ch)]);
+      if (c < mean[i] && c > below) below = c, lo = g, lo_sign = label_sign(in.chart_label[size_t(ch)]);
+      if (c > mean[i] && c < above) above = c, hi = g, hi_sign = label_sign(in.chart_label[size_t(ch)]);
     }
     if (lo >= 0 && hi >= 0 && lo != hi && lo_sign == 1 && hi_sign == -1) out[i].lo = lo, out[i].hi = hi;
   }
@@ -520,17 +531,17 @@ void final_mvc(const PoissonStep& ps, const AxisInputs& in, const std::vector<in
 /// Poisson values, unless that is the level of an a-chart beside the line's chart (the line would lie on the
 /// chart's edge). A line whose flanks were given room (line_flanks, chart_levels) takes a level strictly between
 /// them, clear of the a-charts near it, and its vertices within kCrossingFree hex edges of another line stay free.
-/// Returns per vertex its pinned value (NaN: free) and appends the pinned vertices.
-std::vector<double> feature_line_pins(int a, const AxisInputs& in, const AxisChartOrder& order, const PoissonStep& ps,
-                                      const std::vector<long>& k, const std::vector<LineFlanks>& flanks,
-                                      std::vector<int>& pinned, PositionDeformStats& st) {
+/// `mean`: per line its vertices' mean Poisson value (line_means). Returns per vertex its pinned value (NaN: free)
+/// and appends the pinned vertices.
+std::vector<double> feature_line_pins(int a, const AxisInputs& in, const AxisChartOrder& order,
+                                      const std::vector<double>& mean, const std::vector<long>& k,
+                                      const std::vector<LineFlanks>& flanks, std::vector<int>& pinned,
+                                      PositionDeformStats& st) {
   std::vector<double> pin(in.input.V.rows(), std::numeric_limits<double>::quiet_NaN());
   for (size_t i = 0; i < in.lines.size(); ++i) {
     const FeatureLine& line = in.lines[i];
-    if (line.axis != a) continue;
-    double mean = 0;
-    for (int v : line.vertices) mean += ps.y[ps.var[v]];
-    long level = std::lround(mean / double(line.vertices.size()) / in.lattice);
+    if (line.axis != a || line.vertices.empty()) continue;
+    long level = std::lround(mean[i] / in.lattice);
     const LineFlanks& f = flanks[i];
     const bool room = f.lo >= 0 && k[size_t(f.hi)] - k[size_t(f.lo)] >= 2;
     bool clash = false;
@@ -599,12 +610,13 @@ AxisLevels axis_poisson(int a, const AxisInputs& in, PositionDeformStats& st) {
 /// a-charts) and the feature lines' levels, into lv.
 void axis_levels(int a, const AxisInputs& in, AxisLevels& lv, PolyCubeMap& out, PositionDeformStats& st,
                  std::vector<int>& pinned) {
-  const std::vector<LineFlanks> flanks = line_flanks(a, in, lv.order, lv.ps);
+  const std::vector<double> mean = line_means(a, in, lv.ps);
+  const std::vector<LineFlanks> flanks = line_flanks(a, in, lv.order, lv.ps, mean);
   lv.k = chart_levels(lv.order, lv.ps, in, flanks, st);
   for (int ch = 0; ch < int(in.seg.charts.size()); ++ch)
     if (label_axis(in.seg.charts[size_t(ch)].label) == a)
       out.chart_plane[ch] = int(lv.k[size_t(lv.order.chart_group[size_t(ch)])]);
-  lv.pin = feature_line_pins(a, in, lv.order, lv.ps, lv.k, flanks, pinned, st);
+  lv.pin = feature_line_pins(a, in, lv.order, mean, lv.k, flanks, pinned, st);
 }
 
 /// Step 4 of axis a: the final solve with the chart planes pinned, into out.U.col(a).
