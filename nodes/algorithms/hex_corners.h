@@ -68,12 +68,54 @@ constexpr int kLanes = int(sizeof(Lanes) / sizeof(double));
 
 /// Items [begin, end) kLanes at a time, then the rest one by one: f(Lanes{}, i) for i = begin, begin +
 /// kLanes, ... while kLanes items remain, then f(0.0, i) (a double) for each item left. f dispatches on
-/// the first argument's type, a computation written once for both (the same bits either way).
+/// the first argument's type, a computation written once for both (the same bits either way). Called by
+/// for_lanes through one of the two loops below, which inline f and all it calls.
 template <class F>
-inline void for_lanes(std::size_t begin, std::size_t end, F&& f) {
+inline void for_lanes_inlined(std::size_t begin, std::size_t end, F& f) {
   std::size_t i = begin;
   for (; i + kLanes <= end; i += kLanes) f(Lanes{}, i);
   for (; i < end; ++i) f(0.0, i);
+}
+
+#if defined(__GNUC__) && defined(__x86_64__)
+/// The lane loop for x86-64's baseline (SSE2), f and its callees inlined: the code for_lanes runs on a CPU
+/// without AVX2.
+template <class F>
+__attribute__((flatten)) void for_lanes_baseline(std::size_t begin, std::size_t end, F& f) {
+  for_lanes_inlined(begin, end, f);
+}
+
+/// The same loop compiled for AVX2 (f and its callees inlined into it, so they are compiled for AVX2 too): a
+/// Lanes is one 256-bit register instead of two SSE2 ones. AVX2 brings no fused multiply-add (that is the
+/// separate FMA extension, left off) and Eigen's packets stay SSE2's (chosen by the build's macros, not the
+/// function's target), so every operation and its order is the baseline's: the same bits, and the same
+/// meshes on either kind of CPU (tests/nodes/algorithms/test_lanes_isa.cpp compares them). The PolyCube
+/// map's untangling and the optimizer's global untangling and average ascent run through it: 12 % off the
+/// bench's total (docs/CHANGELOG.md).
+template <class F>
+__attribute__((target("avx2"), flatten)) void for_lanes_avx2(std::size_t begin, std::size_t end, F& f) {
+  for_lanes_inlined(begin, end, f);
+}
+
+/// True if the CPU running this has AVX2 (asked once).
+inline bool cpu_has_avx2() {
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
+}
+#endif
+
+/// for_lanes_inlined, in the AVX2 loop on a CPU that has it (x86-64 with GCC or Clang), else in the
+/// baseline's.
+template <class F>
+inline void for_lanes(std::size_t begin, std::size_t end, F&& f) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (cpu_has_avx2())
+    for_lanes_avx2(begin, end, f);
+  else
+    for_lanes_baseline(begin, end, f);
+#else
+  for_lanes_inlined(begin, end, f);
+#endif
 }
 
 /// The mantissa part of libm_cbrt (below): m^(1/3) for m in [0.5, 1), a degree-6 polynomial and one Halley
