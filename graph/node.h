@@ -22,6 +22,7 @@
 /// @endcode
 #pragma once
 
+#include "nodes/artefacts/frames.h"
 #include "nodes/artefacts/meshes.h"
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
@@ -121,14 +122,16 @@ struct NodeContext {
   json metrics = json::object();      ///< node-specific figures, copied into report.json
   std::vector<std::string> warnings;  ///< repairs and fallbacks, copied into report.json
   ProgressFn on_progress;             ///< may be empty
-  /// Set by a node whose output is in another frame than its inputs (NodeSpec::frame_role enters):
-  /// x -> frame x. --save-all turns the outputs of it and of everything downstream of it back.
-  std::optional<Eigen::Matrix3d> frame;
-  /// The frame the node's inputs are in (set by the runtime inside a branch of the orientation search;
-  /// none = the input's frame). A node that writes side files writes positions through in_input_frame.
-  std::optional<Eigen::Matrix3d> input_frame;
+  /// Set by a node whose output is in another frame than its inputs (NodeSpec::frame_role enters): the
+  /// frame, against its inputs' frame. --save-all turns the outputs of it and of everything downstream of it
+  /// back.
+  std::optional<RigidFrame> frame;
+  /// The frame the node's inputs are in, against the input file's (set by the runtime downstream of a node
+  /// that enters a frame: the canonical frame, a branch of the orientation search, or both; none = the
+  /// input's frame). A node that writes side files writes positions through in_input_frame.
+  std::optional<RigidFrame> input_frame;
   /// V (#V by 3 positions in the inputs' frame) in the input's frame, for side files.
-  RowMatrixX3d in_input_frame(const RowMatrixX3d& V) const { return input_frame ? RowMatrixX3d(V * *input_frame) : V; }
+  RowMatrixX3d in_input_frame(const RowMatrixX3d& V) const { return input_frame ? input_frame->inverse().apply(V) : V; }
 
   void warn(const std::string& w) { warnings.push_back(w); }
   /// Reports progress and is a cancellation point: \throw Interrupted after SIGINT/SIGTERM.
@@ -336,9 +339,11 @@ struct NodeSpec {
   /// a skipped node is not run, produces nothing and is reported as skipped; an optional port from a
   /// skipped node is left unconnected. Empty results are not cached.
   bool may_skip = false;
-  /// How the node's output relates to the input's frame (the orientation search, nodes/orient):
-  /// `keeps` the frame of its inputs, `enters` a candidate's frame (it sets NodeContext::frame), `leaves`
-  /// it (its output is in the input's frame again). --save-all writes every artefact in the input's frame.
+  /// How the node's output relates to the input's frame (the canonical frame and the orientation search,
+  /// nodes/orient): `keeps` the frame of its inputs, `enters` a candidate's frame (it sets
+  /// NodeContext::frame, against its inputs' frame), `leaves` it (its output is in the frame of its Frames
+  /// input again: the input's, or the canonical frame for a branch's mesh). --save-all writes every artefact
+  /// in the input's frame.
   enum class FrameRole { keeps, enters, leaves } frame_role = FrameRole::keeps;
   std::string stage() const { return type.substr(0, type.find('/')); }
   /// `register_node(make_node<P>(...).with_version("2"))`
@@ -378,9 +383,9 @@ NodeSpec make_node(std::string type, std::string doc, ParamSet<P> params, std::v
 /// Writes an artefact to a file (used by --save-all). \throw IOError
 using ArtefactSaver = std::function<void(const Artefact&, const std::filesystem::path&)>;
 
-/// An artefact with every position x replaced by R x (a rotation), for --save-all of artefacts built in
-/// another frame. \pre R is a rotation
-using ArtefactTurner = std::function<Artefact(const Artefact&, const Eigen::Matrix3d& R)>;
+/// An artefact with every position x replaced by f.R (x - f.centre), for --save-all of artefacts built in
+/// another frame. \pre f.R is a rotation
+using ArtefactTurner = std::function<Artefact(const Artefact&, const RigidFrame& f)>;
 
 /// Binary serialisation of one artefact type, for the artefact cache. `version` is the format
 /// version of the payload: bump it when the layout changes (older cache entries are then ignored).

@@ -335,8 +335,11 @@ class NodeRunner {
         throw Error("produced " + (out ? out.type : std::string("nothing")) + " instead of " + n.spec->output);
       outputs_[i] = out;
       using Role = NodeSpec::FrameRole;
-      if (n.spec->frame_role == Role::enters) frame_[i] = ctx.frame;
+      if (n.spec->frame_role == Role::enters && ctx.frame)
+        frame_[i] = ctx.input_frame ? ctx.input_frame->then(*ctx.frame) : *ctx.frame;
+      if (n.spec->frame_role == Role::enters && !ctx.frame) frame_[i] = ctx.input_frame;
       if (n.spec->frame_role == Role::keeps) frame_[i] = ctx.input_frame;
+      if (n.spec->frame_role == Role::leaves) frame_[i] = frames_frame(i);
       if (opt_.save_all && out) save(i, out);
     } catch (const NodeError&) {
       throw;
@@ -366,15 +369,24 @@ class NodeRunner {
     return false;
   }
 
+  /// The frame of node i's Frames input (the frame its frames were found in), or none.
+  std::optional<RigidFrame> frames_frame(size_t i) const {
+    const ResolvedNode& n = nodes_[i];
+    for (size_t k = 0; k < n.input_nodes.size(); ++k)
+      if (n.input_nodes[k] >= 0 && n.spec->inputs[k].artefact_type == artefact_name<Frames>())
+        return frame_[size_t(n.input_nodes[k])];
+    return std::nullopt;
+  }
+
   /// --save-all: writes node i's artefact, in the input's frame. \throw Error when it cannot be turned back
   void save(size_t i, const Artefact& out) {
     auto [ext, saver] = Registry::instance().saver(out.type);
     if (!saver) return;
     Artefact shown = out;
-    if (frame_[i] && *frame_[i] != Eigen::Matrix3d::Identity()) {
+    if (frame_[i] && !frame_[i]->is_identity()) {
       const ArtefactTurner* turn = Registry::instance().turner(out.type);
       if (!turn) throw Error("--save-all: no way to turn a " + out.type + " back into the input's frame");
-      shown = (*turn)(out, frame_[i]->transpose());
+      shown = (*turn)(out, frame_[i]->inverse());
     }
     saver(shown, save_all_path(nodes_, nodes_[i].id, ext, opt_.out_dir));
   }
@@ -386,9 +398,9 @@ class NodeRunner {
   std::vector<Artefact> outputs_;
   std::vector<std::string> identity_;  // per node what its dependants' keys name it by
   std::vector<std::string> keys_;
-  // Per computed node the rotation input -> the frame its output is in (NodeSpec::frame_role); none =
-  // the input's frame. Only --save-all uses it (it computes every node, so no cache hit hides one).
-  std::vector<std::optional<Eigen::Matrix3d>> frame_;
+  // Per computed node the frame its output is in, against the input's (NodeSpec::frame_role); none = the
+  // input's frame. Only --save-all uses it (it computes every node, so no cache hit hides one).
+  std::vector<std::optional<RigidFrame>> frame_;
   std::mutex event_mutex_;
 };
 

@@ -346,13 +346,16 @@ PolyCubeSegmentation read_segmentation_binary(std::istream& in) {
   return read_all(in, "PolyCubeSegmentation", read_segmentation);
 }
 PolyCubeMap read_polycube_map_binary(std::istream& in) { return read_all(in, "PolyCubeMap", read_map); }
-// Frames: u64 count, then per candidate R (9 doubles, row-major), energy, source, i32 branch.
+// Frames: u64 count, then per candidate R (9 doubles, row-major), centre (3 doubles), grid, energy, source,
+// i32 branch.
 void write_binary(std::ostream& out, const Frames& f) {
   Writer w(out);
   w.count(f.candidates.size());
   for (const FrameCandidate& c : f.candidates) {
     for (int r = 0; r < 3; ++r)
       for (int k = 0; k < 3; ++k) w.pod(c.R(r, k));
+    for (int k = 0; k < 3; ++k) w.pod(c.centre[k]);
+    w.pod(c.grid);
     w.pod(c.energy);
     w.str(c.source);
     w.pod(std::int32_t(c.branch));
@@ -361,10 +364,13 @@ void write_binary(std::ostream& out, const Frames& f) {
 Frames read_frames_binary(std::istream& in) {
   return read_all(in, "Frames", [](Reader& r) {
     Frames f;
-    f.candidates.resize(r.count(9 * 8 + 8 + 8 + 4));
+    f.candidates.resize(r.count(9 * 8 + 3 * 8 + 8 + 8 + 8 + 4));
     for (FrameCandidate& c : f.candidates) {
       for (int i = 0; i < 3; ++i)
         for (int k = 0; k < 3; ++k) c.R(i, k) = r.pod<double>();
+      for (int k = 0; k < 3; ++k) c.centre[k] = r.pod<double>();
+      c.grid = r.pod<double>();
+      if (!(c.grid >= 0)) r.fail("negative grid");
       c.energy = r.pod<double>();
       c.source = r.str();
       c.branch = r.pod<std::int32_t>();

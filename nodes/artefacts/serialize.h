@@ -23,7 +23,7 @@
 namespace polyhex {
 
 /// Format version of every payload below (ArtefactCodec::version).
-constexpr std::uint32_t kCodecVersion = 6;
+constexpr std::uint32_t kCodecVersion = 7;
 
 /// Writes the payload of one artefact. \throw IOError when the stream fails
 void write_binary(std::ostream& out, const SurfaceMesh& m);

@@ -136,9 +136,9 @@ const bool registered_savers = [] {
                 [](const Artefact& a, const std::filesystem::path& p) { write_hexmesh(*a.as<HexMesh>(), p, "vtk"); });
   auto add_turner = [&reg](auto tag) {
     using M = decltype(tag);
-    reg.add_turner(artefact_name<M>(), [](const Artefact& a, const Eigen::Matrix3d& R) {
+    reg.add_turner(artefact_name<M>(), [](const Artefact& a, const RigidFrame& f) {
       M m = *a.as<M>();
-      m.V = m.V * R.transpose();
+      m.V = f.apply(m.V);
       return make_artefact(std::move(m));
     });
   };

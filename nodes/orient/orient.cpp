@@ -226,7 +226,8 @@ Frames input_frame_only(const SurfaceMesh& s) {
   return f;
 }
 
-Frames orient_frames(const SurfaceMesh& s, const OrientParams& p, OrientStats* stats) {
+Frames orient_frames(const SurfaceMesh& s, const OrientParams& p, OrientStats* stats,
+                     const Eigen::Matrix3d* input_axes) {
   check(p);
   // The descents run on the binned normals (cheap), and each minimum found is polished and scored on
   // every triangle's normal: bins depend on the frame, the triangles do not.
@@ -256,7 +257,8 @@ Frames orient_frames(const SurfaceMesh& s, const OrientParams& p, OrientStats* s
 
   Frames out;
   FrameCandidate input;
-  input.energy = energy(tris, total_exact, Eigen::Matrix3d::Identity());
+  if (input_axes) input.R = *input_axes;
+  input.energy = energy(tris, total_exact, input.R);
   input.source = "input";
   input.branch = 1;
   std::vector<FrameCandidate> found;
@@ -303,15 +305,20 @@ Frames orient_frames(const SurfaceMesh& s, const OrientParams& p, OrientStats* s
                    [](const FrameCandidate& a, const FrameCandidate& b) { return a.energy < b.energy; });
   // A minimum next to the input frame that is not clearly better is the input frame itself: the input
   // frame runs in its place and gives the mesh it gave before the search existed, bit for bit.
-  found.erase(std::remove_if(found.begin(), found.end(),
-                             [&](const FrameCandidate& c) {
-                               return frame_distance_degrees(c.R, Eigen::Matrix3d::Identity()) < p.distinct_degrees &&
-                                      input.energy - c.energy < kMinGain;
-                             }),
-              found.end());
+  // With input_axes it is the other way round: the minimum runs, found alike in every copy of the shape.
+  auto near_input = [&](const FrameCandidate& c) { return frame_distance_degrees(c.R, input.R) < p.distinct_degrees; };
+  bool input_covered = false;
+  if (input_axes)
+    input_covered = std::any_of(found.begin(), found.end(), near_input);
+  else
+    found.erase(
+        std::remove_if(found.begin(), found.end(),
+                       [&](const FrameCandidate& c) { return near_input(c) && input.energy - c.energy < kMinGain; }),
+        found.end());
   // The branches: the lowest energy first (the input frame first among equals), then every candidate
   // within `within` of it, up to max_frames.
-  std::vector<FrameCandidate*> ranked{&input};
+  std::vector<FrameCandidate*> ranked;
+  if (!input_covered) ranked.push_back(&input);
   for (FrameCandidate& c : found) ranked.push_back(&c);
   std::stable_sort(ranked.begin(), ranked.end(),
                    [](const FrameCandidate* a, const FrameCandidate* b) { return a->energy < b->energy; });

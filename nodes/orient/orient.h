@@ -62,17 +62,22 @@ struct OrientStats {
 double alignment_energy(const SurfaceMesh& s, const Eigen::Matrix3d& R);
 
 /// The candidate frames of a surface, scored, and which run. candidates[0] is the input frame
-/// (identity); the others follow by increasing energy, each canonical (the one of its 24
+/// (identity, or input_axes); the others follow by increasing energy, each canonical (the one of its 24
 /// cube-equivalent rotations nearest the identity), no two within distinct_degrees. A minimum within
 /// distinct_degrees of the input frame and less than 1e-4 lower in energy is the input frame (dropped:
 /// an axis-aligned part runs in its own frame, bit for bit as without the search). Branch 1 goes to the
 /// lowest energy (the input frame first among equals), branches 2.. to the next ones with energy up to
 /// (1 + within) x the lowest plus 1e-4, up to max_frames. A minimum moved onto the flat faces' frame
 /// lists `flat_faces` among its sources and is scored there. Deterministic.
+/// With input_axes (the surface is in the canonical frame of placement.h, and *input_axes is the rotation
+/// from it to the input's axes), the search itself runs as without (the same candidates for a turned copy),
+/// and the input's axes are a candidate only where no minimum is within distinct_degrees of them: a minimum
+/// that is runs in their place, so that an axis-aligned part and its turned copy run the same frame.
 /// \param s  surface, V #V by 3, F #F by 3 (its normals count, not its closedness)
 /// \throw InvalidInput when s has no triangle of positive area or a coordinate is not finite
 /// \throw ConfigError for params out of range
-Frames orient_frames(const SurfaceMesh& s, const OrientParams& p, OrientStats* stats = nullptr);
+Frames orient_frames(const SurfaceMesh& s, const OrientParams& p, OrientStats* stats = nullptr,
+                     const Eigen::Matrix3d* input_axes = nullptr);
 
 /// The input-frame-only result (orient/input): one candidate, identity, branch 1.
 Frames input_frame_only(const SurfaceMesh& s);

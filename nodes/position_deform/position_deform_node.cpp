@@ -98,12 +98,12 @@ const bool saver_registered = [] {
         surface.replace(surface.size() - std::string(".vtk").size(), std::string::npos, "_surface.vtk");
         write_polycube_vtk(surface, m->U, *m->segmentation);
       });
-  Registry::instance().add_turner(artefact_name<PolyCubeMap>(), [](const Artefact& a, const Eigen::Matrix3d& R) {
+  Registry::instance().add_turner(artefact_name<PolyCubeMap>(), [](const Artefact& a, const RigidFrame& f) {
     PolyCubeMap m = *a.as<PolyCubeMap>();
     TetMesh input = *m.input;
-    input.V = input.V * R.transpose();
+    input.V = f.apply(input.V);
     m.input = std::make_shared<const TetMesh>(std::move(input));
-    m.U = m.U * R.transpose();
+    m.U = f.apply(m.U);
     return make_artefact(std::move(m));
   });
   return true;

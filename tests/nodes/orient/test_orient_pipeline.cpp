@@ -1,6 +1,7 @@
 // The default config on a turned part: the same sizes as the part in its own frame, the part's frame
 // found, and a mesh on the turned input's surface (not on the part where it was before turning).
 #include "nodes/algorithms/shapes.h"
+#include "nodes/formats/hexmesh_io.h"
 #include "nodes/formats/surface_io.h"
 #include "nodes/formats/tetmesh_io.h"
 #include "tests/helpers/cli.h"
@@ -67,4 +68,50 @@ TEST_CASE("orient: a turned L-block is meshed in its own frame, at the same size
   const polyhex::TetMesh framed = polyhex::read_tetmesh(dir / "b" / ("frame_tets#" + std::to_string(kept) + ".vtk"));
   REQUIRE(framed.V.rows() == tets.V.rows());
   CHECK((framed.V - tets.V).cwiseAbs().maxCoeff() < 1e-6 * ta);
+}
+
+TEST_CASE("placement canonical: a turned and moved copy of a part gets the same mesh, turned and moved",
+          "[orient][placement][cli]") {
+  const fs::path dir = polyhex::test::fresh_dir("placement_canonical");
+  const polyhex::SurfaceMesh part = polyhex::make_shape({"l_block", 32});
+  const Eigen::Matrix3d R = polyhex::test::seeded_rotation(11);
+  const Eigen::RowVector3d t(5, -3, 2);
+  polyhex::SurfaceMesh copy = polyhex::test::rotated(part, R);
+  copy.V.rowwise() += t;
+  polyhex::write_surface(part, dir / "part.obj");
+  polyhex::write_surface(copy, dir / "copy.obj");
+  const std::string canonical = " --set placement.frame=canonical";
+  const json a = run_default(dir / "part.obj", dir / "a", canonical);
+  const json b = run_default(dir / "copy.obj", dir / "b", canonical + " --save-all");
+  const json& qa = a["nodes"]["quality"]["metrics"];
+  const json& qb = b["nodes"]["quality"]["metrics"];
+  CHECK(qa["inverted"] == 0);
+  CHECK(qb["hexes"] == qa["hexes"]);
+  CHECK(std::abs(qb["sj_min"].get<double>() - qa["sj_min"].get<double>()) < 1e-12);
+  CHECK(std::abs(qb["sj_avg"].get<double>() - qa["sj_avg"].get<double>()) < 1e-12);
+  // the part's own axes are a minimum of the search: a found frame runs in their place, in both runs
+  CHECK(a["nodes"]["orient"]["metrics"]["candidates"][0]["branch"] == 0);
+  // the copy's mesh is the part's mesh moved with it, and lies on the copy's surface
+  const polyhex::HexMesh ha = polyhex::read_hexmesh(dir / "a" / "hex.vtk");
+  const polyhex::HexMesh hb = polyhex::read_hexmesh(dir / "b" / "hex.vtk");
+  REQUIRE(ha.V.rows() == hb.V.rows());
+  CHECK(ha.H == hb.H);
+  const polyhex::RowMatrixX3d expected = (ha.V * R.transpose()).rowwise() + t;
+  CHECK((hb.V - expected).cwiseAbs().maxCoeff() < 1e-9);
+  CHECK(qb["hausdorff_max"].get<double>() < 0.5 * 0.04);
+  // --save-all writes what was built in the canonical frame in the input's frame: the placed surface is the
+  // copy (within the grid), the tets fill the conditioned surface's box, a branch's tets are the tets
+  const double grid = b["nodes"]["placement"]["metrics"]["grid"];
+  CHECK(grid > 0);
+  const polyhex::SurfaceMesh placed = polyhex::read_surface(dir / "b" / "placed.obj");
+  REQUIRE(placed.V.rows() == copy.V.rows());
+  CHECK((placed.V - copy.V).cwiseAbs().maxCoeff() < 2 * grid);
+  const polyhex::SurfaceMesh conditioned = polyhex::read_surface(dir / "b" / "condition.obj");
+  const polyhex::TetMesh tets = polyhex::read_tetmesh(dir / "b" / "tets.vtk");
+  CHECK((tets.V.colwise().minCoeff() - conditioned.V.colwise().minCoeff()).cwiseAbs().maxCoeff() < 1e-9);
+  CHECK((tets.V.colwise().maxCoeff() - conditioned.V.colwise().maxCoeff()).cwiseAbs().maxCoeff() < 1e-9);
+  const int kept = b["nodes"]["best"]["metrics"]["chosen"];
+  const polyhex::TetMesh framed = polyhex::read_tetmesh(dir / "b" / ("frame_tets#" + std::to_string(kept) + ".vtk"));
+  REQUIRE(framed.V.rows() == tets.V.rows());
+  CHECK((framed.V - tets.V).cwiseAbs().maxCoeff() < 1e-9);
 }
