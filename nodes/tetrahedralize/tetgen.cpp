@@ -4,6 +4,7 @@
 
 #include "nodes/algorithms/reference_length.h"
 #include "nodes/formats/surface_io.h"
+#include "runtime/abort_guard.h"
 #include "runtime/errors.h"
 #include "runtime/stopwatch.h"
 
@@ -29,6 +30,12 @@ using Vec3 = Eigen::Vector3d;
 constexpr double kVolumeFactor = 1.5;
 constexpr double kTetsPerRegularVolume = 1.5;  // tets per volume of a regular tet of edge h (measured)
 constexpr double kGrid = 68719476736.0;        // 2^36: normalized coordinates are rounded to multiples of 1 / kGrid
+constexpr int kTurnedAttempts = 2;             // frames TetGen is tried in after a failed assertion
+
+/// The k-th fixed frame TetGen is tried in after a failed assertion (k >= 1): a turn about an oblique axis.
+Eigen::Matrix3d kept_turn(int k) {
+  return Eigen::AngleAxisd(0.5 + 0.7 * k, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+}
 
 std::string name_of(const SurfaceMesh& s) { return s.source.empty() ? std::string("surface") : s.source; }
 
@@ -288,31 +295,6 @@ TetMesh tetrahedralize(const SurfaceMesh& surface, const TetgenParams& p, Tetgen
   const double h = estimate.h;                                                     // absolute target edge
   const double h_unit = p.edge_length * (estimate.reference_length / norm.scale);  // in normalized coordinates
 
-  // Normalized coordinates, rounded to multiples of 2^-36 (1.5e-11 of the diagonal): a model scaled by
-  // 1e-9 normalizes to numbers a few ulps away from the unit model's, and the rounding makes them
-  // (almost always) bit-identical, so TetGen takes the same decisions and gives the same tets.
-  const RowMatrixX3d V = ((surface.V.rowwise() - norm.centre) / norm.scale * kGrid).array().round() / kGrid;
-  const RowMatrixX3i& F = surface.F;
-  std::unordered_map<PointBits, int, PointBitsHash> input_point;
-  input_point.reserve(size_t(V.rows()));
-  for (Eigen::Index i = 0; i < V.rows(); ++i) input_point.emplace(bits_of(V.data() + 3 * i), int(i));
-  tetgenio in, out;
-  in.firstnumber = 0;
-  in.numberofpoints = static_cast<int>(V.rows());
-  in.pointlist = new REAL[3 * V.rows()];
-  std::copy(V.data(), V.data() + 3 * V.rows(), in.pointlist);  // row-major: x0 y0 z0 x1 ...
-  in.numberoffacets = static_cast<int>(F.rows());
-  in.facetlist = new tetgenio::facet[F.rows()];
-  for (Eigen::Index i = 0; i < F.rows(); ++i) {
-    tetgenio::facet& f = in.facetlist[i];
-    tetgenio::init(&f);
-    f.numberofpolygons = 1;
-    f.polygonlist = new tetgenio::polygon[1];
-    tetgenio::init(&f.polygonlist[0]);
-    f.polygonlist[0].numberofvertices = 3;
-    f.polygonlist[0].vertexlist = new int[3]{F(i, 0), F(i, 1), F(i, 2)};
-  }
-
   // TetGen's -a is an upper bound and the refined tets come out smaller, so the bound is 1.5 times
   // the volume of a regular tet of edge h (h^3 / (6 sqrt 2) ~ 0.118 h^3): measured, this puts the
   // mean interior edge at 0.95-1.0 h (sphere) and the mean edge of a box mesh at 0.93 h, where the
@@ -322,15 +304,61 @@ TetMesh tetrahedralize(const SurfaceMesh& surface, const TetgenParams& p, Tetgen
   sw.precision(17);
   sw << "pzQq" << p.radius_edge << "/" << p.min_dihedral << "a" << max_volume << (p.refine_surface ? "" : "Y");
   std::string switches = sw.str();
-  {
-    std::lock_guard<std::mutex> lock(tetgen_mutex());
-    try {
-      tetgenbehavior b;
-      if (!b.parse_commandline(switches.data())) throw InvalidInput(who + ": bad TetGen switches " + switches);
-      run_tetgen(b, in, out);
-    } catch (int code) {
-      throw InvalidInput(tetgen_error(code, who));
+
+  // TetGen 1.5.0 as Debian builds it checks itself with assert(), and on some surfaces a check fails in
+  // one frame and not in another (in-volume_twist in its canonical placement, nodes/orient/placement.h):
+  // the failure is caught (runtime/abort_guard.h) and TetGen runs again on the surface turned about its
+  // centre by a fixed rotation, the tets turned back (input vertices keep their exact coordinates).
+  const RowMatrixX3d unit = (surface.V.rowwise() - norm.centre) / norm.scale;
+  Eigen::Matrix3d turn = Eigen::Matrix3d::Identity();
+  int aborted = 0;
+  std::unordered_map<PointBits, int, PointBitsHash> input_point;
+  tetgenio out;
+  for (;; ++aborted) {
+    if (aborted > 0) turn = kept_turn(aborted);
+    // Normalized coordinates, rounded to multiples of 2^-36 (1.5e-11 of the diagonal): a model scaled by
+    // 1e-9 normalizes to numbers a few ulps away from the unit model's, and the rounding makes them
+    // (almost always) bit-identical, so TetGen takes the same decisions and gives the same tets.
+    const RowMatrixX3d V =
+        ((aborted == 0 ? unit : RowMatrixX3d(unit * turn.transpose())) * kGrid).array().round() / kGrid;
+    const RowMatrixX3i& F = surface.F;
+    input_point.clear();
+    input_point.reserve(size_t(V.rows()));
+    for (Eigen::Index i = 0; i < V.rows(); ++i) input_point.emplace(bits_of(V.data() + 3 * i), int(i));
+    tetgenio in;
+    in.firstnumber = 0;
+    in.numberofpoints = static_cast<int>(V.rows());
+    in.pointlist = new REAL[3 * V.rows()];
+    std::copy(V.data(), V.data() + 3 * V.rows(), in.pointlist);  // row-major: x0 y0 z0 x1 ...
+    in.numberoffacets = static_cast<int>(F.rows());
+    in.facetlist = new tetgenio::facet[F.rows()];
+    for (Eigen::Index i = 0; i < F.rows(); ++i) {
+      tetgenio::facet& f = in.facetlist[i];
+      tetgenio::init(&f);
+      f.numberofpolygons = 1;
+      f.polygonlist = new tetgenio::polygon[1];
+      tetgenio::init(&f.polygonlist[0]);
+      f.polygonlist[0].numberofvertices = 3;
+      f.polygonlist[0].vertexlist = new int[3]{F(i, 0), F(i, 1), F(i, 2)};
     }
+    out.deinitialize();
+    out.initialize();
+    bool finished = false;
+    {
+      std::lock_guard<std::mutex> lock(tetgen_mutex());
+      try {
+        tetgenbehavior b;
+        if (!b.parse_commandline(switches.data())) throw InvalidInput(who + ": bad TetGen switches " + switches);
+        finished = returns_without_abort([&] { run_tetgen(b, in, out); });
+      } catch (int code) {
+        throw InvalidInput(tetgen_error(code, who));
+      }
+    }
+    if (finished) break;
+    if (aborted == kTurnedAttempts)
+      throw InvalidInput(who +
+                         ": TetGen failed one of its internal checks (an assertion) in the input's frame and in " +
+                         std::to_string(kTurnedAttempts) + " turned frames");
   }
   if (out.numberoftetrahedra <= 0 || out.numberofcorners != 4)
     throw InvalidInput(who + ": TetGen produced no tetrahedra; is the surface closed?");
@@ -356,7 +384,10 @@ TetMesh tetrahedralize(const SurfaceMesh& surface, const TetgenParams& p, Tetgen
     if (it != input_point.end())
       m.V.row(remap[i]) = surface.V.row(it->second);
     else
-      m.V.row(remap[i]) = Eigen::RowVector3d(q[0], q[1], q[2]) * norm.scale + norm.centre;
+      m.V.row(remap[i]) = (aborted == 0 ? Eigen::RowVector3d(q[0], q[1], q[2])
+                                        : Eigen::RowVector3d(Eigen::RowVector3d(q[0], q[1], q[2]) * turn)) *
+                              norm.scale +
+                          norm.centre;
   }
   for (Eigen::Index t = 0; t < m.T.rows(); ++t) {
     Vec3 a = m.V.row(m.T(t, 0)), b = m.V.row(m.T(t, 1)), c = m.V.row(m.T(t, 2)), d = m.V.row(m.T(t, 3));
@@ -366,6 +397,7 @@ TetMesh tetrahedralize(const SurfaceMesh& surface, const TetgenParams& p, Tetgen
   if (stats) {
     *stats = tet_stats(m, h);
     stats->estimated_tets = estimate.tets;
+    stats->aborted_attempts = aborted;
     stats->seconds = seconds_since(t0);
   }
   return m;

@@ -43,6 +43,8 @@ struct TetgenStats {
   double seconds = 0;           ///< wall time of the whole call
   double estimated_tets = 0;    ///< estimate_tets(...).tets made before the run (the count TetGen gives is
                                 ///< 0.9-1.2 times this on a box, up to 3.5 times on surfaces finer than h)
+  int aborted_attempts = 0;     ///< runs of TetGen that failed an internal check (assertion) before the one kept,
+                                ///< each followed by one in a turned frame (tetgen.cpp)
 
   /// Report names (runtime/stat_fields.h).
   static constexpr auto fields() {
@@ -51,7 +53,8 @@ struct TetgenStats {
                            stat("vertices", &S::vertices), stat("target_edge", &S::target_edge),
                            stat("edge_min_rel", &S::edge_min), stat("edge_max_rel", &S::edge_max),
                            stat("edge_mean_rel", &S::edge_mean), stat("min_dihedral_deg", &S::min_dihedral_deg),
-                           stat("max_radius_edge", &S::max_radius_edge), stat("seconds", &S::seconds));
+                           stat("max_radius_edge", &S::max_radius_edge), stat("seconds", &S::seconds),
+                           stat("aborted_attempts", &S::aborted_attempts));
   }
 };
 
@@ -84,7 +87,9 @@ struct TetgenStats {
 ///        max_tets or the machine's memory (the message gives the estimate and the smallest edge_length
 ///        that fits), and for every TetGen failure: the message names
 ///        surface.source and the cause (self-intersection, tiny feature, nearly touching facets,
-///        out of memory, internal error) with TetGen's code.
+///        out of memory, internal error) with TetGen's code, or its failed internal check (an assertion,
+///        which would abort the process: caught, and TetGen tried again in up to 2 fixed turned frames,
+///        stats->aborted_attempts; the error when every frame failed).
 TetMesh tetrahedralize(const SurfaceMesh& surface, const TetgenParams& p, TetgenStats* stats = nullptr);
 
 /// Estimates the tet count of tetrahedralize(surface, {edge_length}) from the enclosed volume.

@@ -29,9 +29,14 @@ const bool registered = register_node(
           TetgenStats s;
           auto mesh = tetrahedralize(*in.get<SurfaceMesh>(0), p, &s);
           put_stats(s, ctx.metrics);
+          if (s.aborted_attempts > 0)
+            ctx.warnings.push_back(
+                "TetGen failed one of its internal checks (an assertion) in the input's frame; the "
+                "tets were made in a turned frame (" +
+                std::to_string(s.aborted_attempts) + " attempt(s) lost, the mesh is as valid)");
           return make_artefact(std::move(mesh));
         })
-        .with_version("2"));  // 2: normalized coordinates for TetGen, max_tets
+        .with_version("3"));  // 2: normalized coordinates for TetGen, max_tets; 3: aborted_attempts
 
 }  // namespace
 }  // namespace polyhex

@@ -1,5 +1,7 @@
 #include "graph/node.h"
 #include "nodes/algorithms/shapes.h"
+#include "nodes/formats/surface_io.h"
+#include "nodes/orient/placement.h"
 #include "nodes/tetrahedralize/tetgen.h"
 #include "runtime/errors.h"
 #include "tests/helpers/surface_checks.h"
@@ -12,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 
 using namespace polyhex;
@@ -310,6 +313,30 @@ TEST_CASE("tetgen on the shared surfaces", "[tetgen][shared]") {
       CHECK(st.tets > 10000);
       CHECK(st.edge_max < 2.0);
     }
+  }
+  SECTION("in-volume_twist in its canonical placement: TetGen's failed assertion caught, a turned frame kept") {
+    // TetGen 1.5.0 fails an assert() in insertpoint on this surface (as placement.h places it, 24 bits): without
+    // the guard the process aborts; the tets then come from the first turned frame, as valid as any
+    const SurfaceMesh twist = read_surface(dir / "in-volume_twist.stl");
+    PlacementParams pp;
+    pp.frame = PlacementFrame::canonical;
+    SurfaceMesh placed = twist;
+    placed.V = placement_frame(twist, pp).candidates[0].place(twist.V);
+    TetgenStats st;
+    const TetMesh m = valid_tets(placed, 0.02, &st, true, 1e-6);
+    CHECK(st.aborted_attempts == 1);
+    CHECK(st.tets > 10000);
+    // the input's vertices keep their exact coordinates through the turn and back
+    std::set<std::array<double, 3>> points;
+    for (Eigen::Index i = 0; i < m.V.rows(); ++i) points.insert({m.V(i, 0), m.V(i, 1), m.V(i, 2)});
+    long missing = 0;
+    for (Eigen::Index i = 0; i < placed.V.rows(); ++i)
+      missing += !points.count({placed.V(i, 0), placed.V(i, 1), placed.V(i, 2)});
+    CHECK(missing == 0);
+    // in the input's own frame TetGen passes at once
+    TetgenStats own;
+    valid_tets(twist, 0.02, &own, true, 1e-6);
+    CHECK(own.aborted_attempts == 0);
   }
   SECTION("girl.off intersects itself") {
     SurfaceMesh girl = read_fixture(dir / "girl.off");
