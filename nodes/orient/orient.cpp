@@ -305,11 +305,14 @@ Frames orient_frames(const SurfaceMesh& s, const OrientParams& p, OrientStats* s
                    [](const FrameCandidate& a, const FrameCandidate& b) { return a.energy < b.energy; });
   // A minimum next to the input frame that is not clearly better is the input frame itself: the input
   // frame runs in its place and gives the mesh it gave before the search existed, bit for bit.
-  // With input_axes it is the other way round: the minimum runs, found alike in every copy of the shape.
+  // With input_axes it is the other way round: the minimum runs, found alike in every copy of the shape;
+  // and the input's axes run only as the best frame (a turned copy's are another rotation, whose energy
+  // on an organic model is often within `within` of the best: they would run there and not here).
   auto near_input = [&](const FrameCandidate& c) { return frame_distance_degrees(c.R, input.R) < p.distinct_degrees; };
   bool input_covered = false;
   if (input_axes)
-    input_covered = std::any_of(found.begin(), found.end(), near_input);
+    input_covered = std::any_of(found.begin(), found.end(), near_input) ||
+                    (!found.empty() && input.energy > found.front().energy + kMinGain);
   else
     found.erase(
         std::remove_if(found.begin(), found.end(),

@@ -71,8 +71,10 @@ double alignment_energy(const SurfaceMesh& s, const Eigen::Matrix3d& R);
 /// lists `flat_faces` among its sources and is scored there. Deterministic.
 /// With input_axes (the surface is in the canonical frame of placement.h, and *input_axes is the rotation
 /// from it to the input's axes), the search itself runs as without (the same candidates for a turned copy),
-/// and the input's axes are a candidate only where no minimum is within distinct_degrees of them: a minimum
-/// that is runs in their place, so that an axis-aligned part and its turned copy run the same frame.
+/// and the input's axes run only where no minimum is within distinct_degrees of them and none is lower in
+/// energy by 1e-4: a minimum near them runs in their place (an axis-aligned part and its turned copy run the
+/// same frame), and they are not one of the frames nearly as good (a turned copy's axes would be another
+/// rotation there).
 /// \param s  surface, V #V by 3, F #F by 3 (its normals count, not its closedness)
 /// \throw InvalidInput when s has no triangle of positive area or a coordinate is not finite
 /// \throw ConfigError for params out of range

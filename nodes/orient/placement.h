@@ -22,8 +22,9 @@
 /// mesh is carried back to the input's frame at the end (unframe_hexes).
 ///
 /// What it costs: the input's own frame is no longer where TetGen runs, so on a model the mesh is another
-/// draw of the same method (its minimum moves as it does with any upstream change), and the input's frame
-/// is a candidate of the search only through its own axes (orient_frames' input_axes).
+/// draw of the same method (its minimum moves as it does with any upstream change), and the input's axes run
+/// only as the search's best frame (orient_frames' input_axes): a scan's upright pose, often a good frame
+/// that no minimum of the alignment energy is near, is not tried.
 #pragma once
 
 #include "nodes/artefacts/frames.h"
