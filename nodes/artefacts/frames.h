@@ -33,7 +33,7 @@ struct RigidFrame {
 struct FrameCandidate {
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-  /// > 0: positions in this frame are rounded to multiples of it (the canonical frame, nodes/orient/canonical.h:
+  /// > 0: positions in this frame are rounded to multiples of it (the canonical frame, nodes/orient/placement.h:
   /// two copies of a shape then get the same bits); 0: not rounded
   double grid = 0;
   double energy = 0;   ///< axis-alignment energy of the surface normals in this frame (nodes/orient/orient.h)
@@ -52,7 +52,8 @@ struct FrameCandidate {
   }
 };
 
-/// The candidates: [0] is the input frame (R = identity), then the others by
+/// The candidates: [0] is the input frame (R = identity, or the input's axes when the search ran on a
+/// canonical placement), then the others by
 /// increasing energy, no two within the search's distinct angle of each other (up to the cube's symmetries).
 struct Frames {
   std::vector<FrameCandidate> candidates;

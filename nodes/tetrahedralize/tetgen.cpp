@@ -33,7 +33,7 @@ constexpr double kGrid = 68719476736.0;        // 2^36: normalized coordinates a
 constexpr int kTurnedAttempts = 2;             // frames TetGen is tried in after a failed assertion
 
 /// The k-th fixed frame TetGen is tried in after a failed assertion (k >= 1): a turn about an oblique axis.
-Eigen::Matrix3d kept_turn(int k) {
+Eigen::Matrix3d retry_turn(int k) {
   return Eigen::AngleAxisd(0.5 + 0.7 * k, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
 }
 
@@ -315,7 +315,7 @@ TetMesh tetrahedralize(const SurfaceMesh& surface, const TetgenParams& p, Tetgen
   std::unordered_map<PointBits, int, PointBitsHash> input_point;
   tetgenio out;
   for (;; ++aborted) {
-    if (aborted > 0) turn = kept_turn(aborted);
+    if (aborted > 0) turn = retry_turn(aborted);
     // Normalized coordinates, rounded to multiples of 2^-36 (1.5e-11 of the diagonal): a model scaled by
     // 1e-9 normalizes to numbers a few ulps away from the unit model's, and the rounding makes them
     // (almost always) bit-identical, so TetGen takes the same decisions and gives the same tets.
