@@ -24,4 +24,11 @@ inline SurfaceMesh rotated(const SurfaceMesh& s, const Eigen::Matrix3d& R) {
   return r;
 }
 
+/// `s` turned by R about the origin, then moved by t: every vertex x replaced by R x + t.
+inline SurfaceMesh moved(const SurfaceMesh& s, const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
+  SurfaceMesh m = rotated(s, R);
+  m.V.rowwise() += t.transpose();
+  return m;
+}
+
 }  // namespace polyhex::test

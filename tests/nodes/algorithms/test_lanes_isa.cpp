@@ -132,7 +132,7 @@ TEST_CASE("for_lanes: the AVX2 loop and the baseline loop give the kernels' bits
   };
   const Tets tets = random_tets(40003);  // not a multiple of kLanes: the scalar tail runs too
   auto det = [](const double* M) {
-    return M[0] * (M[4] * M[8] - M[5] * M[7]) - M[1] * (M[3] * M[8] - M[5] * M[6]) + M[2] * (M[3] * M[7] - M[4] * M[6]);
+    return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(M).determinant();
   };
   long inverted = 0;  // det(D R) < 0
   for (size_t i = 0; i < tets.w.size(); ++i) inverted += det(&tets.D[9 * i]) * det(&tets.R[9 * i]) < 0;

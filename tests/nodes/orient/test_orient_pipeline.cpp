@@ -75,9 +75,8 @@ TEST_CASE("placement canonical: a turned and moved copy of a part gets the same 
   const fs::path dir = polyhex::test::fresh_dir("placement_canonical");
   const polyhex::SurfaceMesh part = polyhex::make_shape({"l_block", 32});
   const Eigen::Matrix3d R = polyhex::test::seeded_rotation(11);
-  const Eigen::RowVector3d t(5, -3, 2);
-  polyhex::SurfaceMesh copy = polyhex::test::rotated(part, R);
-  copy.V.rowwise() += t;
+  const Eigen::Vector3d t(5, -3, 2);
+  const polyhex::SurfaceMesh copy = polyhex::test::moved(part, R, t);
   polyhex::write_surface(part, dir / "part.obj");
   polyhex::write_surface(copy, dir / "copy.obj");
   const std::string canonical = " --set placement.frame=canonical";
@@ -96,7 +95,7 @@ TEST_CASE("placement canonical: a turned and moved copy of a part gets the same 
   const polyhex::HexMesh hb = polyhex::read_hexmesh(dir / "b" / "hex.vtk");
   REQUIRE(ha.V.rows() == hb.V.rows());
   CHECK(ha.H == hb.H);
-  const polyhex::RowMatrixX3d expected = (ha.V * R.transpose()).rowwise() + t;
+  const polyhex::RowMatrixX3d expected = (ha.V * R.transpose()).rowwise() + t.transpose();
   CHECK((hb.V - expected).cwiseAbs().maxCoeff() < 1e-9);
   CHECK(qb["hausdorff_max"].get<double>() < 0.5 * 0.04);
   // --save-all writes what was built in the canonical frame in the input's frame: the placed surface is the

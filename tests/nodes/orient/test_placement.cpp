@@ -15,13 +15,6 @@ using namespace polyhex;
 
 namespace {
 
-/// s turned by R about the origin, then moved by t.
-SurfaceMesh moved(const SurfaceMesh& s, const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
-  SurfaceMesh m = test::rotated(s, R);
-  m.V.rowwise() += t.transpose();
-  return m;
-}
-
 PlacementParams canonical() {
   PlacementParams p;
   p.frame = PlacementFrame::canonical;
@@ -53,7 +46,7 @@ TEST_CASE("placement: turned and moved copies of a surface get the same canonica
     long differ = 0;
     for (unsigned seed = 1; seed <= 6; ++seed) {
       const Eigen::Vector3d t = 10.0 * test::seeded_rotation(seed + 100).col(0) * double(seed);
-      const SurfaceMesh copy = moved(s, test::seeded_rotation(seed), t);
+      const SurfaceMesh copy = test::moved(s, test::seeded_rotation(seed), t);
       const Frames g = placement_frame(copy, canonical());
       CHECK(g.candidates[0].grid == c.grid);
       differ += (g.candidates[0].place(copy.V).array() != placed.array()).count();
@@ -106,7 +99,7 @@ TEST_CASE("orient: on a canonical surface the input's axes run only where no min
     const SurfaceMesh s = make_shape({name, 32});
     std::vector<Frames> runs;
     for (unsigned seed : {0u, 9u, 10u, 11u}) {
-      const SurfaceMesh in = seed == 0 ? s : moved(s, test::seeded_rotation(seed), Eigen::Vector3d(3, 1, -2));
+      const SurfaceMesh in = seed == 0 ? s : test::moved(s, test::seeded_rotation(seed), Eigen::Vector3d(3, 1, -2));
       const FrameCandidate c = placement_frame(in, canonical()).candidates[0];
       SurfaceMesh placed = in;
       placed.V = c.place(in.V);
