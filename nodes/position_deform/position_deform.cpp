@@ -751,13 +751,15 @@ PolyCubeMap position_deform(std::shared_ptr<const TetMesh> input_ptr, const TetM
     axis_final(a, in, levels[size_t(a)], out, axis_stats[size_t(a)]);
     levels[size_t(a)] = AxisLevels{};  // its systems are no longer needed
   };
-  if (p.lattice_spacing == LatticeSpacing::polycube) {
+  const bool by_volume = p.lattice_spacing == LatticeSpacing::input_volume;
+  if (by_volume) {  // the spacing needs the three axes' Poisson steps first
+    oneapi::tbb::parallel_for(0, 3, poisson);
+  } else {
     in.lattice = h;  // known before the Poisson steps: the axes' phases overlap
     parallel_two_phase(3, poisson, levels_and_final);
-    st.poisson_volume_ratio = signed_volume(poisson_U, input.T) / input_volume;
-  } else {  // the spacing needs the three axes' Poisson steps
-    oneapi::tbb::parallel_for(0, 3, poisson);
-    st.poisson_volume_ratio = signed_volume(poisson_U, input.T) / input_volume;
+  }
+  st.poisson_volume_ratio = signed_volume(poisson_U, input.T) / input_volume;
+  if (by_volume) {
     in.lattice = h * std::cbrt(std::clamp(st.poisson_volume_ratio, kMinVolumeRatio, 1.0 / kMinVolumeRatio));
     oneapi::tbb::parallel_for(0, 3, levels_and_final);
   }
