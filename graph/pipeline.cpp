@@ -335,9 +335,11 @@ class NodeRunner {
         throw Error("produced " + (out ? out.type : std::string("nothing")) + " instead of " + n.spec->output);
       outputs_[i] = out;
       using Role = NodeSpec::FrameRole;
-      if (n.spec->frame_role == Role::enters && ctx.frame)
-        frame_[i] = ctx.input_frame ? ctx.input_frame->then(*ctx.frame) : *ctx.frame;
-      if (n.spec->frame_role == Role::enters && !ctx.frame) frame_[i] = ctx.input_frame;
+      // entering: the inputs' frame, then the node's own (either may be none)
+      if (n.spec->frame_role == Role::enters && ctx.frame && ctx.input_frame)
+        frame_[i] = ctx.input_frame->then(*ctx.frame);
+      else if (n.spec->frame_role == Role::enters)
+        frame_[i] = ctx.frame ? ctx.frame : ctx.input_frame;
       if (n.spec->frame_role == Role::keeps) frame_[i] = ctx.input_frame;
       if (n.spec->frame_role == Role::leaves) frame_[i] = frames_frame(i);
       if (opt_.save_all && out) save(i, out);
