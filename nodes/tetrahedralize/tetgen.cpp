@@ -9,6 +9,9 @@
 #include "runtime/stopwatch.h"
 
 #include <Eigen/Geometry>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/parallel_sort.h>
 #include <tetgen.h>
 
 #include <algorithm>
@@ -217,47 +220,70 @@ TetgenStats tet_stats(const TetMesh& mesh, double h) {
   if (mesh.T.rows() == 0) return s;
   auto P = [&](int i) -> Vec3 { return mesh.V.row(i).transpose(); };
   static const int kEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-  std::unordered_map<std::uint64_t, double> edges;
-  double min_normal_dot = 2;  // smallest n_k.n_l over all tets: gives the smallest dihedral angle
-  s.max_radius_edge = 0;
-  for (Eigen::Index t = 0; t < mesh.T.rows(); ++t) {
-    Vec3 p[4];
-    for (int k = 0; k < 4; ++k) p[k] = P(mesh.T(t, k));
-    double shortest = INFINITY;
-    for (auto& e : kEdges) {
-      double len = (p[e[0]] - p[e[1]]).norm();
-      shortest = std::min(shortest, len);
-      edges.emplace(edge_key(mesh.T(t, e[0]), mesh.T(t, e[1])), len);
-    }
-    // Outward face normals: n[k] is the normal of the face opposite vertex k. The dihedral angle at
-    // the edge shared by faces k and l is pi - angle(n[k], n[l]).
-    Vec3 n[4];
-    for (int k = 0; k < 4; ++k) {
-      const Vec3 &a = p[(k + 1) % 4], &b = p[(k + 2) % 4], &c = p[(k + 3) % 4];
-      Vec3 nk = (b - a).cross(c - a);
-      if (nk.dot(p[k] - a) > 0) nk = -nk;
-      n[k] = nk.normalized();
-    }
-    for (int k = 0; k < 4; ++k)
-      for (int l = k + 1; l < 4; ++l) min_normal_dot = std::min(min_normal_dot, n[k].dot(n[l]));
-    // Circumradius: |a|^2 (b x c) + |b|^2 (c x a) + |c|^2 (a x b) over 2 a.(b x c), a, b, c from p0.
-    Vec3 a = p[1] - p[0], b = p[2] - p[0], c = p[3] - p[0];
-    Vec3 num = a.squaredNorm() * b.cross(c) + b.squaredNorm() * c.cross(a) + c.squaredNorm() * a.cross(b);
-    double radius = num.norm() / std::abs(2 * a.dot(b.cross(c)));
-    s.max_radius_edge = std::max(s.max_radius_edge, radius / shortest);
-  }
+  // Per tet (in parallel; minima and maxima do not depend on the order): its edges (key, length) into six
+  // slots, the smallest n_k.n_l (the smallest dihedral angle) and the largest circumradius over shortest edge.
+  const size_t nt = size_t(mesh.T.rows());
+  std::vector<std::pair<std::uint64_t, double>> edges(6 * nt);
+  struct Extremes {
+    double min_normal_dot = 2, max_radius_edge = 0;
+  };
+  const Extremes ex = tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, nt, 4096), Extremes{},
+      [&](const tbb::blocked_range<size_t>& r, Extremes x) {
+        for (size_t t = r.begin(); t < r.end(); ++t) {
+          const Eigen::Index ti = Eigen::Index(t);
+          Vec3 p[4];
+          for (int k = 0; k < 4; ++k) p[k] = P(mesh.T(ti, k));
+          double shortest = INFINITY;
+          for (int e = 0; e < 6; ++e) {
+            const double len = (p[kEdges[e][0]] - p[kEdges[e][1]]).norm();
+            shortest = std::min(shortest, len);
+            edges[6 * t + size_t(e)] = {edge_key(mesh.T(ti, kEdges[e][0]), mesh.T(ti, kEdges[e][1])), len};
+          }
+          // Outward face normals: n[k] is the normal of the face opposite vertex k. The dihedral angle at
+          // the edge shared by faces k and l is pi - angle(n[k], n[l]).
+          Vec3 n[4];
+          for (int k = 0; k < 4; ++k) {
+            const Vec3 &a = p[(k + 1) % 4], &b = p[(k + 2) % 4], &c = p[(k + 3) % 4];
+            Vec3 nk = (b - a).cross(c - a);
+            if (nk.dot(p[k] - a) > 0) nk = -nk;
+            n[k] = nk.normalized();
+          }
+          for (int k = 0; k < 4; ++k)
+            for (int l = k + 1; l < 4; ++l) x.min_normal_dot = std::min(x.min_normal_dot, n[k].dot(n[l]));
+          // Circumradius: |a|^2 (b x c) + |b|^2 (c x a) + |c|^2 (a x b) over 2 a.(b x c), a, b, c from p0.
+          const Vec3 a = p[1] - p[0], b = p[2] - p[0], c = p[3] - p[0];
+          const Vec3 num = a.squaredNorm() * b.cross(c) + b.squaredNorm() * c.cross(a) + c.squaredNorm() * a.cross(b);
+          const double radius = num.norm() / std::abs(2 * a.dot(b.cross(c)));
+          x.max_radius_edge = std::max(x.max_radius_edge, radius / shortest);
+        }
+        return x;
+      },
+      [](Extremes x, const Extremes& y) {
+        x.min_normal_dot = std::min(x.min_normal_dot, y.min_normal_dot);
+        x.max_radius_edge = std::max(x.max_radius_edge, y.max_radius_edge);
+        return x;
+      });
+  s.max_radius_edge = ex.max_radius_edge;
   // smallest dihedral = pi - largest angle between outward normals = acos(-min n_k.n_l)
-  s.min_dihedral_deg = std::acos(std::clamp(-min_normal_dot, -1.0, 1.0)) * 180.0 / M_PI;
+  s.min_dihedral_deg = std::acos(std::clamp(-ex.min_normal_dot, -1.0, 1.0)) * 180.0 / M_PI;
+  // Each edge once: the copies of an edge (one per tet around it) have the same key and the same length, so
+  // after sorting by key the first of each run stands for it, and the mean is summed in key order.
+  tbb::parallel_sort(edges.begin(), edges.end());
   s.edge_min = INFINITY;
   double sum = 0;
-  for (auto& [key, len] : edges) {
+  size_t unique = 0;
+  for (size_t i = 0; i < edges.size(); ++i) {
+    if (i > 0 && edges[i].first == edges[i - 1].first) continue;
+    const double len = edges[i].second;
     s.edge_min = std::min(s.edge_min, len);
     s.edge_max = std::max(s.edge_max, len);
     sum += len;
+    ++unique;
   }
   s.edge_min /= h;
   s.edge_max /= h;
-  s.edge_mean = sum / static_cast<double>(edges.size()) / h;
+  s.edge_mean = sum / static_cast<double>(unique) / h;
   return s;
 }
 
