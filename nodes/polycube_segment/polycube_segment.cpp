@@ -6,6 +6,11 @@
 #include "runtime/cancel.h"
 #include "runtime/errors.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+#include <tbb/parallel_sort.h>
+
 #include <algorithm>
 #include <array>
 #include <memory>
@@ -69,22 +74,25 @@ RowMatrixX3i boundary_triangles(const TetMesh& mesh) {
     std::array<int, 3> key;
     std::array<int, 3> tri;
   };
-  std::vector<Face> faces;
-  faces.reserve(4 * size_t(nt));
-  for (int t = 0; t < nt; ++t) {
+  for (int t = 0; t < nt; ++t)
     for (int k = 0; k < 4; ++k)
       if (mesh.T(t, k) < 0 || mesh.T(t, k) >= nv)
         throw InvalidInput("tet " + std::to_string(t) + " has vertex index " + std::to_string(mesh.T(t, k)) +
                            " out of range (" + std::to_string(nv) + " vertices)");
-    for (auto& f : face) {
-      Face x;
-      x.tri = {mesh.T(t, f[0]), mesh.T(t, f[1]), mesh.T(t, f[2])};
-      x.key = x.tri;
-      std::sort(x.key.begin(), x.key.end());
-      faces.push_back(x);
-    }
-  }
-  std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) { return a.key < b.key; });
+  // Every tet's four faces, then sorted by their vertex sets (in parallel): a face seen once is on the
+  // boundary. Equal keys are the copies of one face, all dropped, so the order among them does not matter
+  // and the boundary comes out in key order whatever the threads.
+  std::vector<Face> faces(4 * size_t(nt));
+  tbb::parallel_for(tbb::blocked_range<int>(0, nt, 4096), [&](const tbb::blocked_range<int>& r) {
+    for (int t = r.begin(); t < r.end(); ++t)
+      for (int k = 0; k < 4; ++k) {
+        Face& x = faces[4 * size_t(t) + size_t(k)];
+        x.tri = {mesh.T(t, face[k][0]), mesh.T(t, face[k][1]), mesh.T(t, face[k][2])};
+        x.key = x.tri;
+        std::sort(x.key.begin(), x.key.end());
+      }
+  });
+  tbb::parallel_sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) { return a.key < b.key; });
   std::vector<std::array<int, 3>> out;
   for (size_t i = 0; i < faces.size();) {
     size_t j = i;
@@ -98,18 +106,27 @@ RowMatrixX3i boundary_triangles(const TetMesh& mesh) {
 }
 
 PolyCubeSegmentation segment_polycube(const TetMesh& deformed, const PolyCubeSegmentParams& p, const TetMesh* input) {
-  RowMatrixX3i F = boundary_triangles(deformed);
-  Surface s = build_surface(deformed.V, F);
-  std::unique_ptr<TetEdgeGraph> graph;  // the order cycles' evidence needs the tet edges (not built when off)
-  if (p.split_order_cycles) graph = std::make_unique<TetEdgeGraph>(deformed.T, int(deformed.V.rows()));
+  const bool follow = input && p.follow_creases;
+  if (follow && (input->V.rows() != deformed.V.rows() || input->T.rows() != deformed.T.rows()))
+    throw InvalidInput(deformed.source + ": the input tets (" + std::to_string(input->V.rows()) +
+                       " vertices) are not the deformed mesh's (" + std::to_string(deformed.V.rows()) + ")");
+  // The tet edges (for the order cycles' evidence; not built when off) need only the tets: built beside the
+  // boundary surface and the input's creases.
+  RowMatrixX3i F;
+  Surface s;
+  std::unique_ptr<TetEdgeGraph> graph;
   std::unique_ptr<InputCreases> creases;
-  if (input && p.follow_creases) {
-    if (input->V.rows() != deformed.V.rows() || input->T.rows() != deformed.T.rows())
-      throw InvalidInput(deformed.source + ": the input tets (" + std::to_string(input->V.rows()) +
-                         " vertices) are not the deformed mesh's (" + std::to_string(deformed.V.rows()) + ")");
-    creases =
-        std::make_unique<InputCreases>(input_creases(s, input->V, p.hex_edge_length * reference_length(input->V)));
-  }
+  tbb::parallel_invoke(
+      [&] {
+        F = boundary_triangles(deformed);
+        s = build_surface(deformed.V, F);
+        if (follow)
+          creases = std::make_unique<InputCreases>(
+              input_creases(s, input->V, p.hex_edge_length * reference_length(input->V)));
+      },
+      [&] {
+        if (p.split_order_cycles) graph = std::make_unique<TetEdgeGraph>(deformed.T, int(deformed.V.rows()));
+      });
   PolyCubeSegmentation best = segment_once(s, p, p.smoothing_iterations, graph.get(), creases.get());
   int smoothing = p.smoothing_iterations;
   for (int retry = 0; retry < p.fallback_retries && !best.valid; ++retry) {
