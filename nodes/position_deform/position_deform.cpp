@@ -450,9 +450,10 @@ void final_poisson(const PoissonStep& ps, const std::vector<long>& k, const Axis
 
 /// Final solve "mvc_laplace" (the paper): the mean value Laplace equation with the chart planes pinned.
 /// It is not symmetric, so BiCGSTAB, started from the Poisson step's solution, which is already close;
-/// with `final_jacobi_iterations` > 0 first with the diagonal preconditioner (no set-up cost), then,
-/// where that does not converge, with the incomplete LU from where it stopped (the header's
-/// final_jacobi_iterations says why the diagonal one is not the default). Writes the free vertices of u.
+/// with `final_jacobi_iterations` > 0, or above `final_ilu_max` unknowns, first with the diagonal preconditioner
+/// (no set-up cost), then, where that does not converge, with the incomplete LU from where it stopped (the
+/// header's final_jacobi_iterations says why the diagonal one is not the default at the table's sizes). Writes
+/// the free vertices of u.
 /// \throw SolverError for a vertex with zero weights, a system that cannot be preconditioned or a
 ///        solve that does not converge
 void final_mvc(const PoissonStep& ps, const AxisInputs& in, const std::vector<int>& vgroup,
@@ -493,11 +494,15 @@ void final_mvc(const PoissonStep& ps, const AxisInputs& in, const std::vector<in
   for (int v = 0; v < nV; ++v)
     if (vgroup[v] < 0) yf[var[v]] = std::isfinite(pin[size_t(v)]) ? pin[size_t(v)] : ps.y[var[v]];
   constexpr double tol = 1e-12;
+  constexpr int kLargeJacobiIterations = 5000;  // above final_ilu_max (392 per axis at 350k unknowns)
+  const int jacobi_iterations = in.p.final_jacobi_iterations > 0 ? in.p.final_jacobi_iterations
+                                : nFree > in.p.final_ilu_max     ? kLargeJacobiIterations
+                                                                 : 0;
   bool done = false;
-  if (in.p.final_jacobi_iterations > 0) {
+  if (jacobi_iterations > 0) {
     Eigen::BiCGSTAB<Eigen::SparseMatrix<double, Eigen::RowMajor>> jacobi;
     jacobi.setTolerance(tol);
-    jacobi.setMaxIterations(in.p.final_jacobi_iterations);
+    jacobi.setMaxIterations(jacobi_iterations);
     jacobi.compute(Ar);
     Eigen::VectorXd x = jacobi.solveWithGuess(b, yf);
     st.final_iterations += int(jacobi.iterations());

@@ -78,8 +78,14 @@ struct PositionDeformParams {
                                     ///< solved by conjugate gradients (incomplete Cholesky) above: a factorization's
                                     ///< cost grows as n^2 on a 3D mesh (docs/speed.md, size scaling), [0, 2e9]
   int final_jacobi_iterations = 0;  ///< mvc_laplace: BiCGSTAB iterations with the diagonal preconditioner before the
-                                    ///< incomplete LU takes over (0 = incomplete LU at once), [0, 1e6]. Faster, but off
-                                    ///< by default: the meshes change (docs/position_deform.md)
+                                    ///< incomplete LU takes over (0 = incomplete LU at once, or above final_ilu_max
+                                    ///< 5,000), [0, 1e6]. Faster, but off by default: the meshes change
+                                    ///< (docs/position_deform.md)
+  int final_ilu_max = 150000;  ///< mvc_laplace: a final system with more unknowns than this starts with the diagonal
+                               ///< preconditioner (up to final_jacobi_iterations, or 5,000, iterations; then the
+                               ///< incomplete LU from there): the incomplete LU's factorization grows faster than the
+                               ///< iterations (docs/speed.md, size scaling; every mesh of the results table is below
+                               ///< it), [0, 2e9]
   int untangle_iterations =
       600;                 ///< L-BFGS iterations of the map's untangling (untangle_map.h); 0 = keep the folds, [0, 1e6]
   int untangle_rings = 2;  ///< the untangling moves the inverted tets' vertices grown by this many rings, [0, 50]

@@ -37,8 +37,11 @@ const bool registered = register_node(
                  2000000000)
             .add("final_jacobi_iterations", &P::final_jacobi_iterations,
                  "mvc_laplace: BiCGSTAB iterations with the diagonal preconditioner before the incomplete LU (0 = ILU "
-                 "at once, the default: see position_deform.h)",
+                 "at once, the default, or 5,000 above final_ilu_max: see position_deform.h)",
                  0, 1000000)
+            .add("final_ilu_max", &P::final_ilu_max,
+                 "mvc_laplace: a final system with more unknowns starts with the diagonal preconditioner", 0,
+                 2000000000)
             .add("untangle_iterations", &P::untangle_iterations,
                  "L-BFGS iterations of the map's untangling (0 = keep the folds)", 0, 1000000)
             .add("untangle_rings", &P::untangle_rings,

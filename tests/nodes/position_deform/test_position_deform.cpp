@@ -326,6 +326,31 @@ TEST_CASE("the mean value Laplace solve: diagonal preconditioner, incomplete LU 
   check_planes(jac);
 }
 
+TEST_CASE("the final solve above final_ilu_max starts with the diagonal preconditioner, the same planes and map",
+          "[position]") {
+  // A final system with more unknowns than final_ilu_max is solved by BiCGSTAB with the diagonal preconditioner
+  // (up to 5,000 iterations) where the default at this size factors the incomplete LU at once: both to a
+  // relative residual of 1e-12, so the planes are the same integers and the maps agree to far below the hex edge.
+  PositionDeformParams p;
+  p.edge_length = 0.05;
+  p.untangle_iterations = 0;  // compare the solves themselves
+  SurfaceMesh l = test::voxel_surface({{0, 0, 0}, {1, 0, 0}, {0, 0, 1}}, 0.5);
+  Run ilu = run_pipeline(l, 0.05, p);
+  CHECK(ilu.stats.final_ilu_axes == 3);  // below final_ilu_max
+  PositionDeformParams q = p;
+  q.final_ilu_max = 0;
+  Run large = run_pipeline(l, 0.05, q);
+  CHECK(large.stats.final_ilu_axes == 0);
+  CHECK(large.stats.final_iterations > 0);
+  CHECK(large.map.chart_plane == ilu.map.chart_plane);
+  REQUIRE(large.map.U.rows() == ilu.map.U.rows());
+  CHECK((large.map.U - ilu.map.U).cwiseAbs().maxCoeff() < 1e-8 * ilu.map.edge_length);
+  check_planes(large);
+  // an explicit final_jacobi_iterations is the cap at any size: 1 iteration, then the incomplete LU
+  q.final_jacobi_iterations = 1;
+  CHECK(run_pipeline(l, 0.05, q).stats.final_ilu_axes == 3);
+}
+
 TEST_CASE("the Poisson step above poisson_direct_max: conjugate gradients give the factorization's planes and map",
           "[position]") {
   // Both solve one system, the iterative one to a relative residual of 1e-11 with its translation (the eps
