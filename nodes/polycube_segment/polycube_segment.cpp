@@ -63,22 +63,28 @@ void check_labels(const RowMatrixX3i& F, const Eigen::VectorXi& label) {
                          ", expected 0..5");
 }
 
+/// Refuses a mesh without tets or with a vertex index out of range (before anything reads the tets).
+void check_tets(const TetMesh& mesh) {
+  const int nt = int(mesh.T.rows()), nv = int(mesh.V.rows());
+  if (nt == 0) throw InvalidInput("tet mesh has no tetrahedra");
+  for (int t = 0; t < nt; ++t)
+    for (int k = 0; k < 4; ++k)
+      if (mesh.T(t, k) < 0 || mesh.T(t, k) >= nv)
+        throw InvalidInput("tet " + std::to_string(t) + " has vertex index " + std::to_string(mesh.T(t, k)) +
+                           " out of range (" + std::to_string(nv) + " vertices)");
+}
+
 }  // namespace
 
 RowMatrixX3i boundary_triangles(const TetMesh& mesh) {
-  const int nt = int(mesh.T.rows()), nv = int(mesh.V.rows());
-  if (nt == 0) throw InvalidInput("tet mesh has no tetrahedra");
+  check_tets(mesh);
+  const int nt = int(mesh.T.rows());
   // outward faces of a positively oriented tet (v1-v0)x(v2-v0).(v3-v0) > 0
   static const int face[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
   struct Face {
     std::array<int, 3> key;
     std::array<int, 3> tri;
   };
-  for (int t = 0; t < nt; ++t)
-    for (int k = 0; k < 4; ++k)
-      if (mesh.T(t, k) < 0 || mesh.T(t, k) >= nv)
-        throw InvalidInput("tet " + std::to_string(t) + " has vertex index " + std::to_string(mesh.T(t, k)) +
-                           " out of range (" + std::to_string(nv) + " vertices)");
   // Every tet's four faces, then sorted by their vertex sets (in parallel): a face seen once is on the
   // boundary. Equal keys are the copies of one face, all dropped, so the order among them does not matter
   // and the boundary comes out in key order whatever the threads.
@@ -106,6 +112,7 @@ RowMatrixX3i boundary_triangles(const TetMesh& mesh) {
 }
 
 PolyCubeSegmentation segment_polycube(const TetMesh& deformed, const PolyCubeSegmentParams& p, const TetMesh* input) {
+  check_tets(deformed);  // before the two branches below read the tets
   const bool follow = input && p.follow_creases;
   if (follow && (input->V.rows() != deformed.V.rows() || input->T.rows() != deformed.T.rows()))
     throw InvalidInput(deformed.source + ": the input tets (" + std::to_string(input->V.rows()) +

@@ -114,6 +114,12 @@ TEST_CASE("boundary_triangles of a voxel box are outward and complete", "[segmen
   bad.T(3, 2) = 999;
   CHECK_THROWS_AS(boundary_triangles(bad), InvalidInput);
   CHECK_THROWS_WITH(boundary_triangles(bad), Catch::Contains("tet 3 has vertex index 999 out of range"));
+  // segment_polycube refuses it before its tet edge graph, built beside the boundary, reads an index
+  bad.T(5, 0) = -4;
+  PolyCubeSegmentParams p;
+  REQUIRE(p.split_order_cycles);
+  CHECK_THROWS_WITH(segment_polycube(bad, p), Catch::Contains("tet 3 has vertex index 999 out of range"));
+  CHECK_THROWS_WITH(segment_polycube(empty, p), "tet mesh has no tetrahedra");
 }
 
 TEST_CASE("box: 6 charts, 8 corners, 12 edges, valid", "[segment]") {
