@@ -74,10 +74,8 @@ void check_tets(const TetMesh& mesh) {
                            " out of range (" + std::to_string(nv) + " vertices)");
 }
 
-}  // namespace
-
-RowMatrixX3i boundary_triangles(const TetMesh& mesh) {
-  check_tets(mesh);
+/// boundary_triangles of a mesh check_tets has passed.
+RowMatrixX3i checked_boundary_triangles(const TetMesh& mesh) {
   const int nt = int(mesh.T.rows());
   // outward faces of a positively oriented tet (v1-v0)x(v2-v0).(v3-v0) > 0
   static const int face[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
@@ -111,6 +109,13 @@ RowMatrixX3i boundary_triangles(const TetMesh& mesh) {
   return F;
 }
 
+}  // namespace
+
+RowMatrixX3i boundary_triangles(const TetMesh& mesh) {
+  check_tets(mesh);
+  return checked_boundary_triangles(mesh);
+}
+
 PolyCubeSegmentation segment_polycube(const TetMesh& deformed, const PolyCubeSegmentParams& p, const TetMesh* input) {
   check_tets(deformed);  // before the two branches below read the tets
   const bool follow = input && p.follow_creases;
@@ -125,7 +130,7 @@ PolyCubeSegmentation segment_polycube(const TetMesh& deformed, const PolyCubeSeg
   std::unique_ptr<InputCreases> creases;
   tbb::parallel_invoke(
       [&] {
-        F = boundary_triangles(deformed);
+        F = checked_boundary_triangles(deformed);
         s = build_surface(deformed.V, F);
         if (follow)
           creases = std::make_unique<InputCreases>(
