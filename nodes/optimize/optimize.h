@@ -73,6 +73,9 @@ struct OptimizeParams {
                                    ///< crease they stay within a quarter hex edge of it instead)
   double fallback_below_sj = 0.5;  ///< with a fallback mesh: also optimize it when the first result's minimum scaled
                                    ///< Jacobian is below this, [0, 1]
+  bool skip_failed_steps = true;   ///< the max-min sweeps skip a vertex whose last step failed while nothing of its
+                                   ///< hexes has moved since: it would fail again, so the mesh is the same bit for
+                                   ///< bit, faster (false: every step is repeated)
 };
 
 struct OptimizeStats {
@@ -96,6 +99,7 @@ struct OptimizeStats {
   bool global_kept = false;  ///< the result is the global way's (fewer inverted hexes or a higher minimum)
   int iterations = 0;        ///< all sweeps
   long moves = 0;            ///< accepted vertex moves
+  long steps_skipped = 0;    ///< vertex steps the sweeps skipped as certain to fail again (skip_failed_steps)
   int colours = 0;
   double boundary_distance_max = 0;  ///< max distance of a boundary vertex from the surface / bbox diagonal
   bool time_budget_hit = false;
@@ -127,9 +131,9 @@ struct OptimizeStats {
         stat("smooth_rounds", &S::smooth_rounds), stat("smooth_kept", &S::smooth_kept),
         stat("minimum_rounds", &S::minimum_rounds), stat("minimum_kept", &S::minimum_kept),
         stat("minimum_slid", &S::minimum_slid), stat("minimum_gain", &S::minimum_gain),
-        stat("iterations", &S::iterations), stat("moves", &S::moves), stat("colours", &S::colours),
-        stat("boundary_distance_max", &S::boundary_distance_max), stat("released_vertices", &S::released_vertices),
-        stat("returned_vertices", &S::returned_vertices),
+        stat("iterations", &S::iterations), stat("moves", &S::moves), stat("steps_skipped", &S::steps_skipped),
+        stat("colours", &S::colours), stat("boundary_distance_max", &S::boundary_distance_max),
+        stat("released_vertices", &S::released_vertices), stat("returned_vertices", &S::returned_vertices),
         stat("returned_with_neighbours", &S::returned_with_neighbours), stat("time_budget_hit", &S::time_budget_hit),
         stat("seconds", &S::seconds), stat("phase_seconds.untangle", &S::untangle_seconds),
         stat("phase_seconds.global", &S::global_seconds), stat("phase_seconds.maxmin", &S::maxmin_seconds),

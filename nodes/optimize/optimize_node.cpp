@@ -79,7 +79,10 @@ const bool registered = register_node(
             .add(
                 "fallback_below_sj", &P::fallback_below_sj,
                 "with a fallback input: also optimize it when the first result's minimum scaled Jacobian is below this",
-                0.0, 1.0),
+                0.0, 1.0)
+            .add("skip_failed_steps", &P::skip_failed_steps,
+                 "the max-min sweeps skip a vertex whose last step failed while nothing around it has moved "
+                 "since (the same mesh bit for bit, faster)"),
         {{"hexes", artefact_name<HexMesh>()},
          {"surface", artefact_name<SurfaceMesh>()},
          {"fallback", artefact_name<HexMesh>(), true}},

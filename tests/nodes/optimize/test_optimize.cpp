@@ -2,6 +2,7 @@
 #include "graph/node.h"
 #include "nodes/algorithms/hex_corners.h"
 #include "nodes/algorithms/hex_quality.h"
+#include "nodes/algorithms/shapes.h"
 #include "nodes/algorithms/triangle_tree.h"
 #include "nodes/optimize/optimize.h"
 #include "tests/helpers/eigen_orders.h"
@@ -623,4 +624,49 @@ TEST_CASE("a released vertex its hexes hold off the surface goes back with its n
     c = optimize_hexes(g, s, p, nullptr);
   }
   CHECK(c.V == b.V);
+}
+
+TEST_CASE("the sweeps skip only steps that would fail again: the same mesh bit for bit as repeating every step",
+          "[optimize]") {
+  // A grid in a ball: its boundary projected onto the sphere squeezes the hexes at the cube's corners, where
+  // the max-min sweeps stall on the same vertices. Interior vertices perturbed, then two pushed through their
+  // neighbours with one untangling sweep or none (boundary vertices released, then returned): the untangling,
+  // the release and return, the whole-hex moves and the region smoothing move vertices between the max-min
+  // sweeps, so a skip that missed any of their changes would give another mesh.
+  const int n = 6;
+  const SurfaceMesh ball = make_shape({"sphere", 24});  // unit diameter, centred at the origin
+  HexMesh g = test::grid_hex_mesh(n, n, n);
+  g.V = (g.V.array() / n - 0.5) * 0.62;  // the cube's corners 0.54 from the centre, on the sphere 0.5
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-0.02, 0.02);
+  const auto at = [&](int x, int y, int z) { return Eigen::Index((z * (n + 1) + y) * (n + 1) + x); };
+  for (int z = 1; z < n; ++z)
+    for (int y = 1; y < n; ++y)
+      for (int x = 1; x < n; ++x)
+        for (int a = 0; a < 3; ++a) g.V(at(x, y, z), a) += u(rng);
+  for (const int untangle : {200, 1, 0}) {
+    HexMesh start = g;
+    if (untangle <= 1) {
+      start.V.row(at(1, 1, 1)) = g.V.row(at(2, 2, 2));
+      start.V.row(at(4, 3, 1)) = g.V.row(at(3, 3, 2));
+    }
+    OptimizeParams p;
+    p.untangle_iterations = untangle;
+    p.global_iterations = 0;
+    OptimizeParams every = p;
+    every.skip_failed_steps = false;
+    OptimizeStats skip_st, every_st;
+    const HexMesh a = optimize_hexes(start, ball, p, &skip_st);
+    const HexMesh b = optimize_hexes(start, ball, every, &every_st);
+    INFO("untangling sweeps " << untangle);
+    CHECK(skip_st.steps_skipped > 0);
+    CHECK(every_st.steps_skipped == 0);
+    CHECK(a.V == b.V);  // bit for bit
+    CHECK(skip_st.moves == every_st.moves);
+    CHECK(skip_st.maxmin_sweeps == every_st.maxmin_sweeps);
+    CHECK(skip_st.shape_sweeps == every_st.shape_sweeps);
+    CHECK(skip_st.sj_min_after == every_st.sj_min_after);
+    CHECK(skip_st.inverted_after == 0);
+    if (untangle == 0) CHECK(skip_st.returned_vertices > 0);  // released, and back on the sphere
+  }
 }
