@@ -49,6 +49,17 @@ struct CellIncidence {
       g += cell_grad[size_t(corners[size_t(c)].first)].row(corners[size_t(c)].second).transpose();
     return g;
   }
+
+  /// Asks the cache for the rows gather(i, cell_grad) will read (a hint: no value changes).
+  template <class Grads>
+  void prefetch(size_t i, const Grads& cell_grad) const {
+    for (int c = start[i]; c < start[i + 1]; ++c) {
+      const auto& m = cell_grad[size_t(corners[size_t(c)].first)];
+      const int k = corners[size_t(c)].second;
+      __builtin_prefetch(&m(k, 0));
+      __builtin_prefetch(&m(k, m.cols() - 1));
+    }
+  }
 };
 
 /// \param C       #C by k vertex indices
