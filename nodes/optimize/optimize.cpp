@@ -1142,6 +1142,7 @@ class Optimizer {
   /// cut it, as in smooth_worst).
   void average_global() {
     constexpr int kRevertRounds = 10;
+    PhaseTimer timer{st_.average_seconds};
     if (p_.average_iterations <= 0 || out_of_time()) return;
     const auto q = all_quality();
     double min0 = 1, sum0 = 0;

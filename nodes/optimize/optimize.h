@@ -111,7 +111,8 @@ struct OptimizeStats {
   long crease_vertices = 0;           ///< boundary vertices kept on a crease line or at a crease corner
   double seconds = 0;
   double untangle_seconds = 0, global_seconds = 0, maxmin_seconds = 0, element_seconds = 0, smooth_seconds = 0,
-         shape_seconds = 0, minimum_seconds = 0;  ///< per phase
+         shape_seconds = 0, minimum_seconds = 0;  ///< per phase (a phase that calls another counts its time too)
+  double average_seconds = 0;                     ///< the global average ascent (c0), a part of shape_seconds
 
   /// Report names (runtime/stat_fields.h). The crease_* figures are the kept candidate's, reported by the
   /// binding (optimize_node.cpp).
@@ -138,7 +139,8 @@ struct OptimizeStats {
         stat("seconds", &S::seconds), stat("phase_seconds.untangle", &S::untangle_seconds),
         stat("phase_seconds.global", &S::global_seconds), stat("phase_seconds.maxmin", &S::maxmin_seconds),
         stat("phase_seconds.element", &S::element_seconds), stat("phase_seconds.smooth", &S::smooth_seconds),
-        stat("phase_seconds.shape", &S::shape_seconds), stat("phase_seconds.minimum", &S::minimum_seconds));
+        stat("phase_seconds.shape", &S::shape_seconds), stat("phase_seconds.average", &S::average_seconds),
+        stat("phase_seconds.minimum", &S::minimum_seconds));
   }
 };
 

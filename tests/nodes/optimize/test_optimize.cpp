@@ -668,5 +668,7 @@ TEST_CASE("the sweeps skip only steps that would fail again: the same mesh bit f
     CHECK(skip_st.sj_min_after == every_st.sj_min_after);
     CHECK(skip_st.inverted_after == 0);
     if (untangle == 0) CHECK(skip_st.returned_vertices > 0);  // released, and back on the sphere
+    CHECK(skip_st.average_seconds > 0);  // the average ascent ran, and its time is a part of the shape phase's
+    CHECK(skip_st.average_seconds <= skip_st.shape_seconds);
   }
 }
