@@ -711,11 +711,10 @@ class Optimizer {
           ++skipped;
           return;
         }
-        if (step(v)) {
+        if (step(v)) {  // v is among its hexes' vertices: its own change ends the memory of a failure
           ++moved;
           changed_[size_t(v)] = t;
           seen_V_.row(v) = V_.row(v);
-          failed_[size_t(v)] = -1;
         } else {
           failed_[size_t(v)] = t;
         }
@@ -1294,8 +1293,7 @@ class Optimizer {
   // sweep()'s memory of failed steps (would_fail_again)
   long tick_ = 0;              ///< counts colour classes swept and note_changes calls
   std::vector<long> changed_;  ///< per vertex: the tick of its last change
-  std::vector<long> failed_;   ///< per vertex: the tick of its last failed max-min step, -1
-                               ///< none (or moved since)
+  std::vector<long> failed_;   ///< per vertex: the tick of its last failed max-min step, -1 none
   RowMatrixX3d seen_V_;        ///< what note_changes compares against
   std::vector<char> seen_released_;
   std::vector<double> seen_cap_;
