@@ -8,14 +8,76 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <dlfcn.h>
 #include <mutex>
 #include <vector>
 
+// METIS, which CHOLMOD's analysis calls for its ordering, draws from C's rand() after seeding it with srand():
+// one process-wide state, so two analyses at once would interleave their draws and change each other's
+// orderings (and the last bits of every solution). These two replace glibc's rand() and srand() in the whole
+// process (the executable's symbols come first; the link exports them, CMakeLists.txt) by the same generator
+// (glibc's random_r, 128 bytes of state, seed 1 until seeded) with one state per thread. A thread that seeds
+// and then draws, as METIS and TetGen do, sees exactly the sequence it saw before, whatever other threads do,
+// so analyses no longer wait for each other (see analyse()).
+namespace {
+struct ThreadRandom {
+  std::array<char, 128> state{};
+  random_data data{};
+  ThreadRandom() { ::initstate_r(1, state.data(), state.size(), &data); }
+};
+ThreadRandom& thread_random() {
+  thread_local ThreadRandom r;
+  return r;
+}
+}  // namespace
+
+extern "C" int rand() noexcept {
+  std::int32_t x = 0;
+  ::random_r(&thread_random().data, &x);
+  return x;
+}
+
+extern "C" void srand(unsigned seed) noexcept { ::srandom_r(seed, &thread_random().data); }
+
+// OpenBLAS (Debian's libblas.so.3, under CHOLMOD's supernodal kernels) holds one set of kernels per CPU family
+// and picks one when it is loaded: the one OPENBLAS_CORETYPE names, or the CPU's. The sets sum in different
+// orders, so the factors' last bits, and through them every mesh, would depend on the machine's environment:
+// one of our AMD EPYC machines with AVX-512 exports OPENBLAS_CORETYPE=Haswell, another left the choice to
+// OpenBLAS (SkylakeX), and the bench mesh and a test's minimum scaled Jacobian (0.377 against 0.633)
+// differed. OpenBLAS reads the variable in its initialiser, so this runs from the executable's
+// .preinit_array, before any library's initialiser, and rewrites the variable where the environment sets
+// it: SkylakeX where the CPU has the AVX-512 those kernels use (OpenBLAS's own choice there; docs/RESULTS.md
+// was made with them), else Haswell where it has AVX2 and FMA. The entry is replaced in the process's initial
+// environment block itself: libc adopts that block after this runs, so setenv() here would be lost.
+namespace {
+void pin_blas_kernels(int, char**, char** env) {
+  __builtin_cpu_init();  // constructors have not run yet
+  const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
+                      __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512vl") &&
+                      __builtin_cpu_supports("avx512cd");
+  const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  if (!env || (!avx512 && !avx2)) return;
+  static char skylakex[] = "OPENBLAS_CORETYPE=SkylakeX", haswell[] = "OPENBLAS_CORETYPE=Haswell";
+  constexpr char kName[] = "OPENBLAS_CORETYPE=";
+  for (char** e = env; *e; ++e)
+    if (std::strncmp(*e, kName, sizeof(kName) - 1) == 0) *e = avx512 ? skylakex : haswell;
+}
+[[gnu::section(".preinit_array"), gnu::used]] void (*const pin_blas_kernels_at_start)(int, char**,
+                                                                                      char**) = pin_blas_kernels;
+}  // namespace
+
 namespace polyhex {
+
+bool analyses_run_concurrently() {
+  static const bool ours = ::dlsym(RTLD_DEFAULT, "rand") == reinterpret_cast<void*>(&::rand);
+  return ours;
+}
 
 namespace {
 
@@ -32,6 +94,19 @@ void single_threaded_blas() {
     using SetThreads = void (*)(int);
     if (auto f = reinterpret_cast<SetThreads>(::dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) f(1);
   });
+}
+
+/// Makes every OpenMP parallel region the calling thread meets run as a team of one (OpenMP's
+/// max-active-levels 0, a setting of the calling thread). Debian's CHOLMOD clears and fills each supernode in
+/// OpenMP loops with teams of four threads whatever OMP_NUM_THREADS says; from two TBB workers at once (the
+/// rotation stage factors two matrices side by side, the PolyCube map its three axes) that is eight threads on
+/// two cores, most of the time spent waking them: the bench's two rotation factorizations took 0.80 s with the
+/// teams, 0.41 s without. The loops copy and clear entries, so the factor is the same bits. Called on the
+/// thread that is about to call CHOLMOD; looked up at run time (nothing is done without libgomp).
+void serial_openmp() {
+  using SetLevels = void (*)(int);
+  static const auto set = reinterpret_cast<SetLevels>(::dlsym(RTLD_DEFAULT, "omp_set_max_active_levels"));
+  if (set) set(0);
 }
 
 /// A cholmod_common set up the same way everywhere: supernodal LL^T, no printing.
@@ -192,6 +267,7 @@ struct CholmodFactorization::Impl {
   /// Solve the columns [c0, c0+k) of B with one cholmod_solve2 call into X.
   void solve_block(Worker& w, const Eigen::MatrixXd& B, Eigen::MatrixXd& X, long c0, long k) {
     cholmod_dense b = dense_view(B.data() + c0 * n, static_cast<size_t>(n), static_cast<size_t>(k));
+    serial_openmp();
     if (!cholmod_solve2(CHOLMOD_A, L, &b, nullptr, &w.X, nullptr, &w.Y, &w.E, &w.common.c))
       throw SolverError("Cholesky solve: CHOLMOD failed (status " + std::to_string(w.common.c.status) + ")");
     std::memcpy(X.data() + c0 * n, w.X->x, sizeof(double) * static_cast<size_t>(n * k));
@@ -229,11 +305,13 @@ void CholmodFactorization::analyse(const Eigen::SparseMatrix<double>& A_in) {
   m.is_factored = false;
   cholmod_sparse s = Impl::view(*A);
   {
-    // METIS (CHOLMOD's fill-reducing ordering) draws from one process-wide random state (GKlib): two
-    // analyses at once interleave its draws, and the orderings, hence the last bits of the solutions,
-    // change from run to run. Analyses are serialised; factorizations and solves still run concurrently.
+    // METIS (CHOLMOD's fill-reducing ordering) seeds and draws from C's rand(). With the per-thread rand()
+    // above in place, analyses run side by side; were it not (a link that does not export it), two analyses
+    // at once would interleave their draws and change each other's orderings, so they would wait in turn.
     static std::mutex analyse_mutex;
-    std::lock_guard<std::mutex> lock(analyse_mutex);
+    std::unique_lock<std::mutex> lock(analyse_mutex, std::defer_lock);
+    if (!analyses_run_concurrently()) lock.lock();
+    serial_openmp();
     m.L = cholmod_analyze(&s, &m.common.c);
   }
   if (!m.L || m.common.c.status < CHOLMOD_OK)
@@ -277,6 +355,7 @@ void CholmodFactorization::factor(const Eigen::SparseMatrix<double>& A_in) {
   Impl::check_finite(A->valuePtr(), A->nonZeros(), "factorization: matrix has a");
   m.is_factored = false;
   cholmod_sparse s = Impl::view(*A);
+  serial_openmp();
   const int ok = cholmod_factorize(&s, m.L, &m.common.c);
   m.stats.factor_seconds += seconds_since(t0);
   if (m.common.c.status == CHOLMOD_NOT_POSDEF)

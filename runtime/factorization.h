@@ -88,4 +88,10 @@ class CholmodFactorization {
   std::unique_ptr<Impl> impl_;
 };
 
+/// Whether symbolic analyses (analyse()) on different threads run side by side. METIS, behind them, seeds
+/// and draws from C's rand(); factorization.cpp gives the process a rand() with one state per thread, so
+/// that they do not change each other's orderings. False where the link did not make that the process's
+/// rand(): analyses then wait in turn, with the same results.
+bool analyses_run_concurrently();
+
 }  // namespace polyhex
