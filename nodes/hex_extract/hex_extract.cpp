@@ -385,6 +385,16 @@ class Extractor {
     }
     st_.centroids = long(centroids.size());
     const auto nb = tet_neighbours();
+    // each tet's box in the PolyCube (lower corner, upper corner), read by every search that reaches the tet
+    std::vector<std::array<Vec3, 2>> box(size_t(T_.rows()));
+    tbb::parallel_for(Eigen::Index(0), T_.rows(), [&](Eigen::Index t) {
+      Vec3 tlo = P(T_(t, 0)), thi = tlo;
+      for (int m = 1; m < 4; ++m) {
+        tlo = tlo.cwiseMin(P(T_(t, m)));
+        thi = thi.cwiseMax(P(T_(t, m)));
+      }
+      box[size_t(t)] = {tlo, thi};
+    });
 
     struct Scratch {
       std::vector<int> tet_stamp, vert_stamp, queue;
@@ -413,11 +423,7 @@ class Extractor {
         for (int k = 0; k < 4; ++k) {
           const int n = nb[size_t(t)][size_t(k)];
           if (n < 0 || s.tet_stamp[size_t(n)] == stamp) continue;
-          Vec3 tlo = P(T_(n, 0)), thi = tlo;
-          for (int m = 1; m < 4; ++m) {
-            tlo = tlo.cwiseMin(P(T_(n, m)));
-            thi = thi.cwiseMax(P(T_(n, m)));
-          }
+          const auto& [tlo, thi] = box[size_t(n)];
           if ((tlo.array() > hi.array()).any() || (thi.array() < lo.array()).any()) continue;
           s.tet_stamp[size_t(n)] = stamp;
           s.queue.push_back(n);
