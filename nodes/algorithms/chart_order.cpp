@@ -2,6 +2,8 @@
 
 #include "nodes/artefacts/polycube.h"
 
+#include <tbb/parallel_sort.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -41,7 +43,7 @@ TetEdgeGraph::TetEdgeGraph(const RowMatrixX4i& T, int vertices) : start(size_t(v
       if (a > b) std::swap(a, b);
       keys.push_back(a << 32 | b);
     }
-  std::sort(keys.begin(), keys.end());
+  tbb::parallel_sort(keys.begin(), keys.end());  // plain integers: one sorted order, whoever sorts them
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   edges.resize(keys.size());
   for (size_t k = 0; k < keys.size(); ++k) edges[k] = {int(keys[k] >> 32), int(keys[k] & 0xffffffffu)};

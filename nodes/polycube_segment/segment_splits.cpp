@@ -8,6 +8,7 @@
 #include "runtime/errors.h"
 
 #include <Eigen/Geometry>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <array>
@@ -523,8 +524,12 @@ int order_cycles(const Surface& s, const Structure& S, const TetEdgeGraph& graph
   if (cycle_charts) cycle_charts->assign(S.n, 0);
   if (cuts) cuts->clear();
   int total = 0;
+  std::array<AxisChartOrder, 3> orders;  // the three axes' evidence is independent: side by side
+  tbb::parallel_for(0, 3, [&](int a) {
+    orders[size_t(a)] = chart_order_evidence(*s.V, graph, vcharts, S.label, S.adj, a, h, crease_vertex);
+  });
   for (int a = 0; a < 3; ++a) {
-    const AxisChartOrder order = chart_order_evidence(*s.V, graph, vcharts, S.label, S.adj, a, h, crease_vertex);
+    const AxisChartOrder& order = orders[size_t(a)];
     const OrderAcceptance acc = accept_orders(order.ordered, order.groups);
     // A self bridge is a cycle of one group: it is cut between the chart's top and its foot.
     total += int(acc.dropped.size() + order.self_bridges.size());
