@@ -8,6 +8,7 @@
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <array>
@@ -16,7 +17,6 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
-#include <set>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -251,8 +251,8 @@ class Extractor {
   template <class Accept>
   void for_each_point(std::vector<Candidate>& cand, Accept accept) {
     // (lattice point, simplex) is unique: the order, and so the resolution of each group, does not
-    // depend on the order the (parallel) rasterisation produced the candidates in.
-    std::sort(cand.begin(), cand.end(), [](const Candidate& a, const Candidate& b) {
+    // depend on the order the (parallel) rasterisation produced the candidates in, nor on the sort's.
+    tbb::parallel_sort(cand.begin(), cand.end(), [](const Candidate& a, const Candidate& b) {
       return a.key != b.key ? a.key < b.key : a.simplex < b.simplex;
     });
     for (size_t i = 0; i < cand.size();) {
@@ -448,7 +448,15 @@ class Extractor {
     });
 
     // keep complete, non-degenerate hexes, once each
-    std::set<std::array<int, 8>> seen;
+    struct SortedCornersHash {
+      size_t operator()(const std::array<int, 8>& c) const {
+        std::uint64_t h = 0xcbf29ce484222325ULL;  // FNV-1a's, a word at a time
+        for (int v : c) h = (h ^ std::uint32_t(v)) * 0x100000001b3ULL;
+        return size_t(h);
+      }
+    };
+    std::unordered_set<std::array<int, 8>, SortedCornersHash> seen;
+    seen.reserve(hex.size());
     std::vector<std::array<int, 8>> kept;
     for (size_t ci = 0; ci < hex.size(); ++ci) {
       st_.unlocated += missing[ci];
