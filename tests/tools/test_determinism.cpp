@@ -1,5 +1,6 @@
 // Determinism: the same input and config give byte-identical meshes and identical figures for 1, 2
-// and 8 threads and across repeated runs (issue 8). Also: the BLAS under CHOLMOD runs on one thread.
+// and 8 threads and across repeated runs (issue 8). Also: the BLAS under CHOLMOD runs on one thread, and
+// the mesh does not depend on the BLAS kernels the environment names.
 #include "runtime/factorization.h"
 #include "tests/helpers/cli.h"
 #include "tests/helpers/report.h"
