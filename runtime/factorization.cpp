@@ -57,22 +57,28 @@ extern "C" void srand(unsigned seed) noexcept { ::srandom_r(seed, &thread_random
 // environment block itself: libc adopts that block after this runs, so setenv() here would be lost.
 namespace {
 void pin_blas_kernels(int, char**, char** env) {
-  __builtin_cpu_init();  // constructors have not run yet
-  const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
-                      __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512vl") &&
-                      __builtin_cpu_supports("avx512cd");
-  const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  if (!env || (!avx512 && !avx2)) return;
+  const char* kernels = polyhex::blas_kernels_for_this_cpu();
+  if (!env || !kernels) return;
   static char skylakex[] = "OPENBLAS_CORETYPE=SkylakeX", haswell[] = "OPENBLAS_CORETYPE=Haswell";
+  char* entry = std::strcmp(kernels, "SkylakeX") == 0 ? skylakex : haswell;
   constexpr char kName[] = "OPENBLAS_CORETYPE=";
   for (char** e = env; *e; ++e)
-    if (std::strncmp(*e, kName, sizeof(kName) - 1) == 0) *e = avx512 ? skylakex : haswell;
+    if (std::strncmp(*e, kName, sizeof(kName) - 1) == 0) *e = entry;
 }
 [[gnu::section(".preinit_array"), gnu::used]] void (*const pin_blas_kernels_at_start)(int, char**,
                                                                                       char**) = pin_blas_kernels;
 }  // namespace
 
 namespace polyhex {
+
+const char* blas_kernels_for_this_cpu() {
+  __builtin_cpu_init();  // pin_blas_kernels runs before the constructors that would do it
+  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq") &&
+      __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512cd"))
+    return "SkylakeX";
+  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) return "Haswell";
+  return nullptr;
+}
 
 bool analyses_run_concurrently() {
   static const bool ours = ::dlsym(RTLD_DEFAULT, "rand") == reinterpret_cast<void*>(&::rand);

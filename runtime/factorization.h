@@ -94,4 +94,9 @@ class CholmodFactorization {
 /// rand(): analyses then wait in turn, with the same results.
 bool analyses_run_concurrently();
 
+/// The OpenBLAS kernel set polyhex has OpenBLAS run on this CPU where the environment names one
+/// (factorization.cpp): "SkylakeX" with AVX-512 (F, BW, DQ, VL, CD), "Haswell" with AVX2 and FMA only, nullptr on
+/// an older CPU (OpenBLAS's own choice). Safe to call before constructors have run.
+const char* blas_kernels_for_this_cpu();
+
 }  // namespace polyhex
